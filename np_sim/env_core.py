@@ -1,0 +1,166 @@
+"""The batched environment state and its compiled step, shared by ``ParkingEnv`` (one env) and
+``ParkingVectorEnv`` (N envs): the dynamics, checks, reward and termination exist once, over ``(num_envs, ...)``
+arrays (STYLE §5)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from np_sim.config import EnvConfig
+from np_sim.errors import ConfigError
+from np_sim.kernels import step as K
+from np_sim.kernels.collision import pose_valid
+from np_sim.kernels.hermite import hermite_basis
+from np_sim.lidar import footprint_ranges
+from np_sim.observation import observation_size, static_slots
+from np_sim.scene import Scene
+from np_sim.scene_arrays import pack_scenes
+from np_sim.starts import StartSampler, UniformStartSampler
+
+
+def kernel_parameters(config: EnvConfig) -> np.ndarray:
+    """The scalar settings of ``config`` as the float array ``P`` the step kernel reads."""
+    P = np.zeros(K.P_SIZE)
+    ep, rw, cn, ob = config.episode, config.reward, config.connector, config.observation
+    P[K.P_KAPPA_MAX] = config.vehicle.kappa_max
+    P[K.P_LENGTH_MAX] = ep.max_length_m
+    P[K.P_POS_TOL] = ep.position_tolerance_m
+    P[K.P_HEAD_TOL] = math.radians(ep.heading_tolerance_deg)
+    P[K.P_CONN_KAPPA_MAX] = cn.kappa_max
+    P[K.P_SEL_DK] = cn.selection_kappa_weight
+    P[K.P_SEL_LEN] = cn.selection_length_weight
+    P[K.P_SEL_CONST] = cn.selection_constant
+    P[K.P_R_DK] = rw.kappa_change_weight
+    P[K.P_R_LEN] = rw.length_weight
+    P[K.P_R_STEP] = rw.step_penalty
+    P[K.P_R_REV] = rw.reversal_penalty
+    P[K.P_R_SHORT_W] = rw.short_arc_weight
+    P[K.P_R_SHORT_M] = rw.short_arc_m
+    P[K.P_R_BONUS] = rw.success_bonus
+    P[K.P_R_SUCC_REV] = rw.success_reversal_weight
+    P[K.P_R_SUCC_DK] = rw.success_kappa_weight
+    P[K.P_R_H_W] = rw.hermite_weight
+    P[K.P_R_H_DK] = rw.hermite_kappa_weight
+    P[K.P_R_H_LEN] = rw.hermite_length_weight
+    P[K.P_R_H_CONST] = rw.hermite_constant
+    P[K.P_R_H_FLOOR] = rw.hermite_floor
+    P[K.P_R_FAIL] = rw.failure_penalty
+    P[K.P_LIDAR_RANGE] = ob.lidar_range_m
+    P[K.P_SAMPLES] = ep.samples_per_arc
+    P[K.P_MAX_ARCS] = ep.max_arcs
+    P[K.P_N_BEAMS] = ob.n_beams
+    P[K.P_FOOTPRINT] = 1.0 if config.collision == "footprint" else 0.0
+    P[K.P_USE_LIDAR] = 1.0 if ob.use_lidar else 0.0
+    P[K.P_ENSEMBLE] = 1.0 if cn.mode == "ensemble" else 0.0
+    P[K.P_GATE] = 1.0 if cn.heading_gate else 0.0
+    return P
+
+
+class BatchCore:
+    """State of ``num_envs`` episodes over a list of scenes, stepped by one compiled call."""
+
+    def __init__(self, scenes: Sequence[Scene], num_envs: int, config: EnvConfig, start_sampler: StartSampler | None):
+        if isinstance(scenes, Scene):
+            scenes = [scenes]
+        self.scenes = list(scenes)
+        if not self.scenes:
+            raise ConfigError("environment: expected at least one scene, got none")
+        if int(num_envs) < 1:
+            raise ConfigError(f"environment: num_envs must be >= 1, got {num_envs}")
+        self.num_envs = int(num_envs)
+        self.config = config
+        self.arrays = pack_scenes(self.scenes)
+        self.geo = self.arrays.geometry
+        # raises CapacityError naming the scene and the limit (never truncates)
+        self.static_obs = np.stack([static_slots(s, config.observation) for s in self.scenes])
+        self.obs_size = observation_size(config.observation)
+        self.P = kernel_parameters(config)
+        self.local = config.vehicle.footprint_local()
+        self.b_ranges = footprint_ranges(config.vehicle, config.observation.n_beams)
+        self.sampler = UniformStartSampler(self.scenes, config.vehicle, arrays=self.arrays) if start_sampler is None else start_sampler
+        cn = config.connector
+        self.offsets, self.headings, self.scales0, self.scales1 = cn.arrays()
+        self.basis, self.dbasis = hermite_basis(cn.n_samples)
+        n, c = self.num_envs, cn.n_candidates
+        self.h_pts = np.empty((n, c, cn.n_samples, 2))
+        self.h_kbar_max = np.empty((n, c))
+        self.h_dk = np.empty((n, c))
+        self.h_len = np.empty((n, c))
+        self.h_cost = np.empty((n, c))
+        self.S = np.zeros((n, K.S_SIZE))
+        self.R = np.zeros((n, K.R_SIZE))
+        self.obs = np.zeros((n, self.obs_size), np.float32)
+        self._corners = np.empty((4, 2))
+
+    # ------------------------------------------------------------------------------------------------------------
+    def reset_envs(self, env_ids: np.ndarray, rng: np.random.Generator, scene_index=None, start=None) -> None:
+        """Start new episodes in ``env_ids``: scene uniformly at random (or ``scene_index``), start from the
+        sampler (or ``start`` rows, which must be valid under the collision convention)."""
+        env_ids = np.asarray(env_ids, np.int64)
+        for r, i in enumerate(env_ids):
+            if scene_index is None:
+                k = int(rng.integers(len(self.scenes)))
+            else:
+                k = int(np.broadcast_to(np.asarray(scene_index), (len(env_ids),))[r])
+                if not 0 <= k < len(self.scenes):
+                    raise ConfigError(f"reset: scene_index {k} out of range [0, {len(self.scenes)})")
+            if start is None:
+                pose = np.asarray(self.sampler(rng, k), float)
+            else:
+                pose = np.asarray(np.asarray(start, float).reshape(-1, 3)[r if np.ndim(start) == 2 else 0], float)
+                if not pose_valid(self.geo, k, pose[0], pose[1], pose[2], self.config.collision == "footprint",
+                                  self.local, self._corners):
+                    raise ConfigError(
+                        f"reset: start pose {pose.tolist()} is in collision in scene "
+                        f"{self.scenes[k].name or k!r} under the {self.config.collision} convention"
+                    )
+            self.S[i] = 0.0
+            self.S[i, K.S_X : K.S_TH + 1] = pose
+            self.S[i, K.S_SCENE] = k
+        K.observe_batch(self.geo, self.arrays.targets, self.static_obs, self.S, self.P, self.b_ranges, env_ids, self.obs)
+
+    def step(self, actions: np.ndarray) -> None:
+        """Advance every env by its normalised action row; fills ``obs`` and ``R``."""
+        a = np.asarray(actions, dtype=np.float64)
+        if a.shape != (self.num_envs, 2):
+            raise ValueError(f"step: expected actions of shape ({self.num_envs}, 2), got {a.shape}")
+        if not np.all(np.isfinite(a)) or np.any(np.abs(a) > 1.0):
+            bad = np.argwhere(~np.isfinite(a) | (np.abs(a) > 1.0))[0]
+            raise ValueError(
+                f"step: action[{bad[0]}] = {a[bad[0]].tolist()} lies outside the action space [-1, 1]^2 "
+                "(the env never clips; clip or squash in the policy)"
+            )
+        K.step_batch(self.geo, self.arrays.targets, self.static_obs, self.S, self.P, np.ascontiguousarray(a),
+                     self.local, self.b_ranges, self.offsets, self.headings, self.scales0, self.scales1, self.basis,
+                     self.dbasis, self.h_pts, self.h_kbar_max, self.h_dk, self.h_len, self.h_cost, self.obs, self.R)
+
+    def episode_metrics(self) -> dict[str, np.ndarray]:
+        """Per env, the paper's eq:metrics of the episode so far including a Hermite segment of the last step:
+        L = Σ|l_t| + L_H, reversals = Σ I[l_t l_{t−1} < 0] + I[l_T q_H < 0], Δκ = Σ|κ_t − κ_{t−1}| + Δκ_H."""
+        S, R = self.S, self.R
+        with_h = R[:, K.R_HERMITE] >= 0
+        final_rev = with_h & (S[:, K.S_PREV_L] * R[:, K.R_H_FORWARD] < 0)
+        return {
+            "path_length": S[:, K.S_SUM_LEN] + np.where(with_h, R[:, K.R_H_LEN], 0.0),
+            "reversals": (S[:, K.S_N_REV] + final_rev).astype(np.int64),
+            "delta_kappa": S[:, K.S_SUM_DK] + np.where(with_h, R[:, K.R_H_DK], 0.0),
+        }
+
+    def step_info(self) -> dict[str, np.ndarray]:
+        """Per-env info arrays of the last step."""
+        R = self.R
+        info = {
+            "success": R[:, K.R_SUCCESS] > 0,
+            "collision": R[:, K.R_COLLISION] > 0,
+            "hermite_index": R[:, K.R_HERMITE].astype(np.int64),
+            "hermite_length": R[:, K.R_H_LEN].copy(),
+            "hermite_delta_kappa": R[:, K.R_H_DK].copy(),
+            "scene_index": self.S[:, K.S_SCENE].astype(np.int64),
+            "pose": self.S[:, K.S_X : K.S_TH + 1].copy(),
+            "n_arcs": self.S[:, K.S_N_ARCS].astype(np.int64),
+        }
+        info.update(self.episode_metrics())
+        return info
