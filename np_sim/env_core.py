@@ -85,7 +85,7 @@ class BatchCore:
         self.offsets, self.headings, self.scales0, self.scales1 = cn.arrays()
         self.basis, self.dbasis = hermite_basis(cn.n_samples)
         n, c = self.num_envs, cn.n_candidates
-        self.h_pts = np.empty((n, c, cn.n_samples, 2))
+        self.h_pts = np.empty((n, c, 2, cn.n_samples))
         self.h_kbar_max = np.empty((n, c))
         self.h_dk = np.empty((n, c))
         self.h_len = np.empty((n, c))

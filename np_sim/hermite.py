@@ -40,8 +40,10 @@ def discrete_curvature(points, kappa0: float):
     pts = np.ascontiguousarray(points, dtype=float)
     if pts.ndim != 2 or pts.shape[1] != 2 or pts.shape[0] < 3:
         raise ValueError(f"discrete_curvature: expected points of shape (N >= 3, 2), got {pts.shape}")
-    kbar = np.empty(pts.shape[0] - 2)
-    _, dk, length = discrete_curvature_kernel(pts, float(kappa0), kbar)
+    n = pts.shape[0]
+    kbar = np.empty(n - 2)
+    _, dk, length = discrete_curvature_kernel(np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1]),
+                                              float(kappa0), kbar, np.empty(n - 1), np.empty(n - 1), np.empty(n - 1))
     return kbar, dk, length
 
 
@@ -81,7 +83,7 @@ class CandidateSet:
         self.offsets, self.headings, self.scales0, self.scales1 = config.arrays()
         n = config.n_candidates
         self.basis, self.dbasis = hermite_basis(config.n_samples)
-        self.pts = np.empty((n, config.n_samples, 2))
+        self.pts = np.empty((n, 2, config.n_samples))  # (candidate, x/y, sample)
         self.kbar_max = np.empty(n)
         self.dk = np.empty(n)
         self.lengths = np.empty(n)
@@ -143,7 +145,7 @@ def connect(
         return None
     io, ih, i0, i1 = cands.decode(idx)
     return Connection(
-        points=from_target_frame(cands.pts[idx], target),
+        points=from_target_frame(cands.pts[idx].T, target),
         forward=forward,
         length=float(cands.lengths[idx]),
         delta_kappa=float(cands.dk[idx]),
@@ -153,7 +155,7 @@ def connect(
         heading_rad=float(cands.headings[ih]),
         scales=(float(cands.scales0[i0]), float(cands.scales1[i1])),
         index=int(idx),
-        terminal_pose=np.array([*from_target_frame(cands.pts[idx, -1], target),
+        terminal_pose=np.array([*from_target_frame(cands.pts[idx, :, -1], target),
                                 wrap_angle(float(cands.headings[ih]) + float(target[2]) - 0.5 * math.pi)]),
     )
 

@@ -12,8 +12,7 @@ from typing import Callable, Protocol
 
 import numpy as np
 
-from np_sim.kernels.collision import footprint_valid
-from np_sim.kernels.geometry import INSIDE, point_in_polygon
+from np_sim.kernels.sampling import first_free_draw
 from np_sim.scene import Scene
 from np_sim.scene_arrays import SceneArrays, pack_scenes
 from np_sim.vehicle import VehicleSpec
@@ -25,13 +24,18 @@ class StartSampler(Protocol):
 
 class UniformStartSampler:
     """Full-range sampler (SPEC §4.3): position uniform over the start region (default: the boundary) by
-    rejection, heading uniform in [−π, π), kept only when the whole footprint is free."""
+    rejection, heading uniform in [−π, π), kept only when the whole footprint is free.
+
+    Draws come in blocks of ``block`` uniform triples from the caller's generator; the first accepted triple of a
+    block is used and the rest of the block is discarded.
+    """
 
     def __init__(self, scenes: list[Scene], vehicle: VehicleSpec | None = None, max_draws: int = 100_000,
-                 arrays: SceneArrays | None = None):
+                 arrays: SceneArrays | None = None, block: int = 32):
         self.scenes = list(scenes)
         self.vehicle = VehicleSpec() if vehicle is None else vehicle
         self.max_draws = int(max_draws)
+        self.block = int(block)  # part of the sampler's definition: same seed → same starts for the same block
         self.arrays = pack_scenes(self.scenes) if arrays is None else arrays
         self._local = self.vehicle.footprint_local()
         self._regions = [np.asarray(s.start_region if s.start_region is not None else s.boundary, float)
@@ -40,18 +44,17 @@ class UniformStartSampler:
     def __call__(self, rng: np.random.Generator, scene_index: int) -> np.ndarray:
         region = self._regions[scene_index]
         lo, hi = region.min(axis=0), region.max(axis=0)
-        corners = np.empty((4, 2))
-        geo = self.arrays.geometry
-        for _ in range(self.max_draws):
-            x, y = rng.uniform(lo, hi)
-            th = rng.uniform(-math.pi, math.pi)
-            if point_in_polygon(x, y, region, len(region)) != INSIDE:
-                continue
-            if footprint_valid(geo, scene_index, x, y, th, self._local, corners):
-                return np.array([x, y, th])
+        drawn = 0
+        while drawn < self.max_draws:
+            u = rng.random((self.block, 3))  # x, y, θ uniforms, consumed in order
+            r = first_free_draw(self.arrays.geometry, scene_index, region, lo, hi, u, self._local)
+            if r >= 0:
+                return np.array([lo[0] + u[r, 0] * (hi[0] - lo[0]), lo[1] + u[r, 1] * (hi[1] - lo[1]),
+                                 -math.pi + 2.0 * math.pi * u[r, 2]])
+            drawn += self.block
         name = self.scenes[scene_index].name or f"scene {scene_index}"
         raise RuntimeError(
-            f"UniformStartSampler: no footprint-free start found in {self.max_draws} draws for {name}; "
+            f"UniformStartSampler: no footprint-free start found in {drawn} draws for {name}; "
             "the start region may be fully blocked"
         )
 

@@ -24,7 +24,7 @@ from np_sim.kernels.geometry import (
 )
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def point_valid(geo, k: int, px: float, py: float) -> bool:
     """Reference-point convention for one point of scene k."""
     boundary, n_boundary, poly, poly_nv, n_poly, aabb, circle, n_circle = geo[0], geo[1], geo[2], geo[3], geo[4], geo[5], geo[6], geo[7]
@@ -43,7 +43,7 @@ def point_valid(geo, k: int, px: float, py: float) -> bool:
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def footprint_valid(geo, k: int, x: float, y: float, th: float, local: np.ndarray, corners: np.ndarray) -> bool:
     """Footprint convention for the vehicle rectangle ``local`` (4, 2) at pose (x, y, θ); ``corners`` is scratch."""
     boundary, n_boundary, poly, poly_nv, n_poly, aabb, circle, n_circle = geo[0], geo[1], geo[2], geo[3], geo[4], geo[5], geo[6], geo[7]
@@ -68,7 +68,7 @@ def footprint_valid(geo, k: int, x: float, y: float, th: float, local: np.ndarra
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def pose_valid(geo, k: int, x: float, y: float, th: float, footprint: bool, local: np.ndarray,
                corners: np.ndarray) -> bool:
     """One pose under the chosen convention (``footprint`` False = reference point)."""
@@ -77,7 +77,7 @@ def pose_valid(geo, k: int, x: float, y: float, th: float, footprint: bool, loca
     return point_valid(geo, k, x, y)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def poses_valid(geo, k: int, poses: np.ndarray, footprint: bool, local: np.ndarray) -> bool:
     """Every row (x, y, θ) of ``poses`` is valid under the chosen convention; stops at the first invalid one."""
     corners = np.empty((4, 2))

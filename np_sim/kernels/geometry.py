@@ -1,6 +1,6 @@
 """Compiled 2-D geometry kernels: strict point-in-polygon, segment intersection, ray casting, footprint tests.
 
-Each kernel is a short ``@njit(cache=True)`` function over arrays and scalars, tested against shapely in
+Each kernel is a short ``@njit(cache=True, error_model="numpy")`` function over arrays and scalars, tested against shapely in
 ``tests/np_sim/kernels/test_geometry.py``. "Strict" means zero tolerance: a point on a polygon edge is neither
 inside nor outside (it is *on* the polygon), and a ray hits a segment only for segment parameter 0 < u < 1 and
 ray parameter t > 0 (paper App. A, "strict, zero-tolerance segment-bound tests").
@@ -18,7 +18,7 @@ OUTSIDE = 0
 ON_EDGE = -1
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def point_in_polygon(px: float, py: float, verts: np.ndarray, n: int) -> int:
     """Classify a point against the simple polygon ``verts[:n]``: INSIDE (1), OUTSIDE (0) or ON_EDGE (-1).
 
@@ -42,18 +42,18 @@ def point_in_polygon(px: float, py: float, verts: np.ndarray, n: int) -> int:
     return INSIDE if inside else OUTSIDE
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _orient(ax: float, ay: float, bx: float, by: float, cx: float, cy: float) -> float:
     return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _on_segment(ax: float, ay: float, bx: float, by: float, cx: float, cy: float) -> bool:
     """c is collinear with a-b; is it within the segment's bounding box?"""
     return min(ax, bx) <= cx <= max(ax, bx) and min(ay, by) <= cy <= max(ay, by)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def segments_intersect(
     ax: float, ay: float, bx: float, by: float, cx: float, cy: float, dx: float, dy: float
 ) -> bool:
@@ -75,7 +75,7 @@ def segments_intersect(
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def ray_segment_distance(
     ox: float, oy: float, dx: float, dy: float, x0: float, y0: float, x1: float, y1: float
 ) -> float:
@@ -97,7 +97,7 @@ def ray_segment_distance(
     return np.inf
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def cast_beams(
     ox: float,
     oy: float,
@@ -157,7 +157,7 @@ def cast_beams(
                 out[b] = t
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def footprint_corners(x: float, y: float, th: float, local: np.ndarray, out: np.ndarray) -> None:
     """World corners of the vehicle rectangle ``local`` (4, 2) at pose (x, y, θ) into ``out`` (4, 2)."""
     c = math.cos(th)
@@ -167,7 +167,7 @@ def footprint_corners(x: float, y: float, th: float, local: np.ndarray, out: np.
         out[i, 1] = y + s * local[i, 0] + c * local[i, 1]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def polygon_edges_cross(a: np.ndarray, na: int, b: np.ndarray, nb: int) -> bool:
     """Some closed edge of polygon ``a[:na]`` touches or crosses some closed edge of ``b[:nb]``."""
     for i in range(na):
@@ -179,7 +179,7 @@ def polygon_edges_cross(a: np.ndarray, na: int, b: np.ndarray, nb: int) -> bool:
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def polygons_overlap(a: np.ndarray, na: int, b: np.ndarray, nb: int) -> bool:
     """Closed simple polygons a and b share a point (touching counts): edges meet or one holds the other."""
     if polygon_edges_cross(a, na, b, nb):
@@ -191,7 +191,7 @@ def polygons_overlap(a: np.ndarray, na: int, b: np.ndarray, nb: int) -> bool:
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rect_circle_overlap(x: float, y: float, th: float, local: np.ndarray, cx: float, cy: float, r: float) -> bool:
     """Closed vehicle rectangle at pose (x, y, θ) and closed disc (cx, cy, r) share a point.
 

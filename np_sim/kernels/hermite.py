@@ -15,7 +15,7 @@ from numba import njit
 from np_sim.kernels.collision import pose_valid
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def hermite_basis(n: int):
     """Basis values (4, n) and their t-derivatives (4, n) of eq:hermite at t_j = j/(n−1)."""
     b = np.empty((4, n))
@@ -35,45 +35,84 @@ def hermite_basis(n: int):
     return b, db
 
 
-@njit(cache=True)
-def discrete_curvature_kernel(pts: np.ndarray, kappa0: float, kbar: np.ndarray):
-    """eq:hermite-kappa on points (N, 2): fills kbar (N−2,), returns (max κ̄, Δκ_H, sampled length L_H).
+@njit(cache=True, error_model="numpy")
+def discrete_curvature_kernel(xs: np.ndarray, ys: np.ndarray, kappa0: float, kbar: np.ndarray, seg_len: np.ndarray,
+                              cx: np.ndarray, cy: np.ndarray):
+    """eq:hermite-kappa on points (xs, ys) of length N: fills kbar (N−2,), returns (max κ̄, Δκ_H, length L_H).
 
-    v_j = (g_{j+1} − g_j)/Δt, κ̄_j = ‖v̂_{j+1} − v̂_j‖ / (Δt ‖v_j‖), Δκ_H = |κ0 − κ̄_0| + Σ_{j≥1} |κ̄_j − κ̄_{j−1}|,
-    with Δt = 1/(N−1). A zero-length step gives non-finite values (the candidate is then infeasible).
+    With chords c_j = g_{j+1} − g_j (= v_j Δt, Δt = 1/(N−1)), κ̄_j = ‖v̂_{j+1} − v̂_j‖/(Δt‖v_j‖)
+    = ‖ĉ_{j+1} − ĉ_j‖/‖c_j‖ and Δκ_H = |κ0 − κ̄_0| + Σ_{j≥1}|κ̄_j − κ̄_{j−1}|. The unit-vector difference is
+    evaluated without cancellation from the chords' cross product × and dot product ·, with P = ‖c_j‖‖c_{j+1}‖:
+    ‖ĉ_{j+1} − ĉ_j‖² = 2×²/(P(P + ·)) when · ≥ 0, else 2(P − ·)/P (same value, two sqrt and one division per
+    point instead of five). A zero-length chord gives non-finite values (the candidate is then infeasible).
+    ``seg_len``, ``cx``, ``cy`` are (N−1,) scratch; the loops are simple passes so LLVM vectorises them, and the
+    sums use four interleaved accumulators (a fixed order, so results are deterministic).
     """
-    n = pts.shape[0]
-    dt = 1.0 / (n - 1)
-    length = 0.0
-    kmax = 0.0
-    dk = 0.0
-    prev_ux = 0.0
-    prev_uy = 0.0
-    prev_speed = 0.0
-    for j in range(n - 1):
-        vx = (pts[j + 1, 0] - pts[j, 0]) / dt
-        vy = (pts[j + 1, 1] - pts[j, 1]) / dt
-        speed = math.sqrt(vx * vx + vy * vy)
-        length += speed * dt
-        ux = vx / speed if speed > 0.0 else np.nan
-        uy = vy / speed if speed > 0.0 else np.nan
-        if j >= 1:
-            i = j - 1
-            kb = math.sqrt((ux - prev_ux) ** 2 + (uy - prev_uy) ** 2) / (dt * prev_speed)
-            kbar[i] = kb
-            if i == 0:
-                dk = abs(kappa0 - kb)
-            else:
-                dk += abs(kb - kbar[i - 1])
-            if not (kb <= kmax):  # also catches NaN
-                kmax = kb
-        prev_ux = ux
-        prev_uy = uy
-        prev_speed = speed
+    n = xs.shape[0]
+    m = n - 1
+    for j in range(m):
+        dx = xs[j + 1] - xs[j]
+        dy = ys[j + 1] - ys[j]
+        cx[j] = dx
+        cy[j] = dy
+        seg_len[j] = math.sqrt(dx * dx + dy * dy)
+    for j in range(m - 1):
+        cross = cx[j] * cy[j + 1] - cy[j] * cx[j + 1]
+        dot = cx[j] * cx[j + 1] + cy[j] * cy[j + 1]
+        p = seg_len[j] * seg_len[j + 1]
+        if dot >= 0.0:
+            diff2 = 2.0 * cross * cross / (p * (p + dot) * seg_len[j] * seg_len[j])
+        else:
+            diff2 = 2.0 * (p - dot) / (p * seg_len[j] * seg_len[j])
+        kbar[j] = math.sqrt(diff2)
+    l0 = 0.0
+    l1 = 0.0
+    l2 = 0.0
+    l3 = 0.0
+    j = 0
+    while j + 4 <= m:
+        l0 += seg_len[j]
+        l1 += seg_len[j + 1]
+        l2 += seg_len[j + 2]
+        l3 += seg_len[j + 3]
+        j += 4
+    while j < m:
+        l0 += seg_len[j]
+        j += 1
+    d0 = 0.0
+    d1 = 0.0
+    d2 = 0.0
+    d3 = 0.0
+    k0 = 0.0
+    k1 = 0.0
+    k2 = 0.0
+    k3 = 0.0
+    j = 1
+    while j + 4 <= m - 1:
+        d0 += abs(kbar[j] - kbar[j - 1])
+        d1 += abs(kbar[j + 1] - kbar[j])
+        d2 += abs(kbar[j + 2] - kbar[j + 1])
+        d3 += abs(kbar[j + 3] - kbar[j + 2])
+        k0 = max(k0, kbar[j])
+        k1 = max(k1, kbar[j + 1])
+        k2 = max(k2, kbar[j + 2])
+        k3 = max(k3, kbar[j + 3])
+        j += 4
+    while j < m - 1:
+        d0 += abs(kbar[j] - kbar[j - 1])
+        k0 = max(k0, kbar[j])
+        j += 1
+    kmax = max(max(k0, k1), max(max(k2, k3), kbar[0]))
+    for j in range(m - 1):  # NaN anywhere makes the candidate infeasible
+        if not kbar[j] == kbar[j]:
+            kmax = np.nan
+            break
+    dk = abs(kappa0 - kbar[0]) + ((d0 + d1) + (d2 + d3))
+    length = (l0 + l1) + (l2 + l3)
     return kmax, dk, length
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def build_candidates(
     xt: float,
     yt: float,
@@ -94,17 +133,25 @@ def build_candidates(
     lengths: np.ndarray,
     costs: np.ndarray,
 ) -> int:
-    """All candidates from the target-frame pose (x̃, ỹ, θ̃) into ``pts`` (C, N, 2, target frame) and per-candidate
-    max κ̄, Δκ_H, L_H and the selection cost w_dk·Δκ_H + w_len·L_H + w_const (eq:mincost). Returns C.
+    """All candidates from the target-frame pose (x̃, ỹ, θ̃) into ``pts`` (C, 2, N: x row, y row; target frame)
+    and per-candidate max κ̄, Δκ_H, L_H and the selection cost w_dk·Δκ_H + w_len·L_H + w_const (eq:mincost).
+    Returns C.
 
     Tangents (eq:hermite): magnitude = endpoint distance × scale, along the reached heading at g(0) and the
     candidate terminal heading at g(1); negated for reverse connections.
     """
     n = basis.shape[1]
     kb = np.empty(n - 2)
+    seg_len = np.empty(n - 1)
+    cx = np.empty(n - 1)
+    cy = np.empty(n - 1)
     sign = 1.0 if forward else -1.0
     c0 = math.cos(tht)
     s0 = math.sin(tht)
+    b0 = basis[0]
+    b1 = basis[1]
+    b2 = basis[2]
+    b3 = basis[3]
     c = 0
     for io in range(offsets.shape[0]):
         gx = offsets[io]
@@ -118,10 +165,12 @@ def build_candidates(
                 for i1 in range(scales1.shape[0]):
                     t1x = sign * scales1[i1] * dist * c1
                     t1y = sign * scales1[i1] * dist * s1
+                    xs = pts[c, 0]
+                    ys = pts[c, 1]
                     for j in range(n):
-                        pts[c, j, 0] = basis[0, j] * xt + basis[1, j] * gx + basis[2, j] * t0x + basis[3, j] * t1x
-                        pts[c, j, 1] = basis[0, j] * yt + basis[2, j] * t0y + basis[3, j] * t1y
-                    km, d, length = discrete_curvature_kernel(pts[c], kappa0, kb)
+                        xs[j] = b0[j] * xt + b1[j] * gx + b2[j] * t0x + b3[j] * t1x
+                        ys[j] = b0[j] * yt + b2[j] * t0y + b3[j] * t1y
+                    km, d, length = discrete_curvature_kernel(xs, ys, kappa0, kb, seg_len, cx, cy)
                     kbar_max[c] = km
                     dk[c] = d
                     lengths[c] = length
@@ -130,13 +179,13 @@ def build_candidates(
     return c
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def candidate_valid(
     geo, k: int, cand_pts: np.ndarray, target: np.ndarray, heading_t0: float, heading_t1: float,
     forward: bool, footprint: bool, local: np.ndarray, dbasis: np.ndarray, tangents: np.ndarray,
     corners: np.ndarray,
 ) -> bool:
-    """All N points of one candidate (target frame) are valid in scene k's world frame.
+    """All N points of one candidate (``cand_pts`` (2, N), target frame) are valid in scene k's world frame.
 
     Under the footprint convention the vehicle heading at each sample is the analytic tangent direction of
     eq:hermite (plus π when reversing). ``tangents`` holds (t0x, t0y, t1x, t1y, g0x, g0y, g1x, g1y).
@@ -144,10 +193,10 @@ def candidate_valid(
     rot = target[2] - 0.5 * math.pi  # target frame -> world
     cr = math.cos(rot)
     sr = math.sin(rot)
-    n = cand_pts.shape[0]
+    n = cand_pts.shape[1]
     for j in range(n):
-        qx = cand_pts[j, 0]
-        qy = cand_pts[j, 1]
+        qx = cand_pts[0, j]
+        qy = cand_pts[1, j]
         wx = target[0] + cr * qx - sr * qy
         wy = target[1] + sr * qx + cr * qy
         th = 0.0
@@ -168,7 +217,7 @@ def candidate_valid(
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def select_candidate(
     geo,
     k: int,

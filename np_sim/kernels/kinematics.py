@@ -8,13 +8,13 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def wrap_angle(a: float) -> float:
     """Wrap an angle to (-π, π]."""
     return a - 2.0 * math.pi * math.ceil((a - math.pi) / (2.0 * math.pi))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def arc_point(x: float, y: float, th: float, kappa: float, length: float):
     """Pose reached by the arc (κ, l) from (x, y, θ), paper eq:arc; κ = 0 is a straight segment of length l.
 
@@ -38,7 +38,7 @@ def arc_point(x: float, y: float, th: float, kappa: float, length: float):
     return nx, ny, wrap_angle(th - d_k * alpha)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def sample_arc_into(x: float, y: float, th: float, kappa: float, length: float, out: np.ndarray) -> None:
     """Fill ``out`` (n, 3) with the poses at arc lengths l·(j+1)/n, j = 0..n−1 (last row = arc end)."""
     n = out.shape[0]

@@ -33,7 +33,7 @@ from np_sim.kernels.kinematics import arc_point, wrap_angle
  R_H_COST, R_SIZE) = range(11)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def write_observation(geo, k: int, x: float, y: float, th: float, target: np.ndarray, static_row: np.ndarray,
                       b_ranges: np.ndarray, use_lidar: bool, lidar_range: float, lidar: np.ndarray,
                       out: np.ndarray) -> None:
@@ -61,7 +61,7 @@ def write_observation(geo, k: int, x: float, y: float, th: float, target: np.nda
         out[o + i] = static_row[i]
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, cache=True, error_model="numpy")
 def observe_batch(geo, targets, static_obs, S, P, b_ranges, env_ids, obs):
     """Observations of the envs ``env_ids`` at their current poses (used after resets)."""
     n_beams = int(P[P_N_BEAMS])
@@ -73,12 +73,12 @@ def observe_batch(geo, targets, static_obs, S, P, b_ranges, env_ids, obs):
                           P[P_USE_LIDAR] > 0.0, P[P_LIDAR_RANGE], lidar, obs[i])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _sign(v: float) -> float:
     return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, offsets, headings, scales0,
              scales1, basis, dbasis, pts, kbar_max, dk, lengths, costs, obs_row, R_row) -> None:
     """Advance env i by the arc (κ, l) (already in physical units) and write its reward, flags and observation."""
@@ -186,7 +186,7 @@ def step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, 
                       P[P_LIDAR_RANGE], lidar, obs_row)
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, cache=True, error_model="numpy")
 def step_batch(geo, targets, static_obs, S, P, actions, local, b_ranges, offsets, headings, scales0, scales1,
                basis, dbasis, pts, kbar_max, dk, lengths, costs, obs, R) -> None:
     """Step every env by its normalised action row (a_0, a_1) ∈ [−1, 1]², mapped to κ = a_0·κ_max, l = a_1·l_max.

@@ -1,0 +1,499 @@
+"""Scenes: boundary, obstacles, target pose and start region, with their JSON format and validation (SPEC §4, §10).
+
+A scene is stored in the world frame as one JSON object::
+
+    {
+      "version": 1,
+      "name": "reverse_bay",
+      "tags": {"benchmark": "factorial", "split": "test"},
+      "boundary": [[x, y], ...],                 # simple polygon, either orientation, each vertex once
+      "obstacles": [{"polygon": [[x, y], ...]},  # simple polygon, >= 3 vertices
+                    {"circle": [cx, cy, r]}],    # r > 0
+      "target": [x, y, theta],                   # reference-point pose (rear-axle centre), radians
+      "start_region": [[x, y], ...]              # optional simple polygon; absent = whole free space
+    }
+
+Loading validates everything and fixes nothing: every problem raises `SceneError` with the source (file path or
+``"<dict>"``), the field path (``obstacles[3].polygon[2]``) and what was expected against what came. The format has
+no object or vertex limit; the NeuralParker observation limits live in `SceneCapacity` and are enforced only when a
+capacity is passed (`CapacityError`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import shapely
+from shapely.geometry import MultiPoint, Point
+from shapely.geometry import Polygon as ShapelyPolygon
+
+from np_sim.errors import CapacityError, SceneError
+from np_sim.vehicle import VehicleSpec
+
+SCENE_FORMAT_VERSION = 1
+"""The only scene JSON version this module reads and writes."""
+
+
+def _frozen_array(values, what: str) -> np.ndarray:
+    """Copy ``values`` to a read-only (n, 2) float64 array; SceneError naming ``what`` if the shape is wrong."""
+    array = np.array(values, dtype=np.float64)
+    if array.ndim != 2 or array.shape[1] != 2:
+        raise SceneError(f"{what}: expected an array of shape (n, 2), got shape {array.shape}")
+    array.flags.writeable = False
+    return array
+
+
+def _circle_points(center: np.ndarray, radius: float, n: int) -> np.ndarray:
+    """(n, 2) points on the circle at angles 2πk/n, k = 0..n-1 (counter-clockwise)."""
+    angles = 2.0 * np.pi * np.arange(n) / n
+    return np.stack([center[0] + radius * np.cos(angles), center[1] + radius * np.sin(angles)], axis=1)
+
+
+@dataclass(frozen=True)
+class PolygonObstacle:
+    """A polygonal obstacle given by its vertices in the world frame, either orientation, each vertex once."""
+
+    vertices: np.ndarray
+    """(k, 2) float64 world-frame vertices (m), k >= 3, read-only."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "vertices", _frozen_array(self.vertices, "PolygonObstacle.vertices"))
+
+
+@dataclass(frozen=True)
+class CircleObstacle:
+    """A circular obstacle (bin, pillar, bollard); inscribed polygons stand in for it where polygons are needed."""
+
+    center: np.ndarray
+    """(2,) float64 world-frame centre (m), read-only."""
+    radius: float
+    """Radius (m), > 0."""
+
+    def __post_init__(self) -> None:
+        center = np.array(self.center, dtype=np.float64)
+        if center.shape != (2,):
+            raise SceneError(f"CircleObstacle.center: expected shape (2,), got {center.shape}")
+        center.flags.writeable = False
+        object.__setattr__(self, "center", center)
+        object.__setattr__(self, "radius", float(self.radius))
+
+    def octagon(self) -> np.ndarray:
+        """(8, 2) vertices on the circle at angles 2πk/8, k = 0..7, counter-clockwise: observation form (App. A)."""
+        return _circle_points(self.center, self.radius, 8)
+
+    def ring(self, n: int = 16) -> np.ndarray:
+        """(n, 2) vertices on the circle at angles 2πk/n, counter-clockwise: the ray-casting form (App. A, n = 16)."""
+        if int(n) != n or n < 3:
+            raise ValueError(f"CircleObstacle.ring: n must be an integer >= 3, got {n!r}")
+        return _circle_points(self.center, self.radius, int(n))
+
+
+Obstacle = PolygonObstacle | CircleObstacle
+
+
+@dataclass(frozen=True)
+class SceneCapacity:
+    """The NeuralParker observation limits a scene must fit (SPEC §4); limits of the observation, not of the format."""
+
+    max_obstacles: int = 20
+    """Most obstacles the observation encodes."""
+    max_polygon_vertices: int = 8
+    """Most vertices per obstacle polygon (a circle counts as its 8-vertex octagon)."""
+    max_boundary_segments: int = 10
+    """Most boundary segments the observation encodes."""
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """One parking scene in the world frame (SPEC §4).
+
+    Construct with `Scene.from_dict` or `Scene.load`, which validate; direct construction only normalises the
+    arrays (float64, read-only) and checks their shapes — call `validate` on scenes built in code.
+    """
+
+    boundary: np.ndarray
+    """(B, 2) float64 simple polygon (m), either orientation, each vertex once (no repeated closing vertex)."""
+    obstacles: tuple[Obstacle, ...]
+    """Obstacles in scene order (the order the observation and ray casting use)."""
+    target: np.ndarray
+    """(3,) float64 target pose x (m), y (m), θ (rad) of the reference point; θ kept exactly as given."""
+    start_region: np.ndarray | None
+    """(S, 2) float64 simple polygon (m) where starts are drawn, or None for the whole free space."""
+    name: str = ""
+    """Human-readable scene name (used in titles and tables)."""
+    tags: dict = field(default_factory=dict)
+    """Free str -> str | int | float labels (benchmark, split, cell, ...)."""
+    version: int = SCENE_FORMAT_VERSION
+    """Scene format version; only `SCENE_FORMAT_VERSION` exists."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "boundary", _frozen_array(self.boundary, "Scene.boundary"))
+        target = np.array(self.target, dtype=np.float64)
+        if target.shape != (3,):
+            raise SceneError(f"Scene.target: expected shape (3,), got {target.shape}")
+        target.flags.writeable = False
+        object.__setattr__(self, "target", target)
+        if self.start_region is not None:
+            object.__setattr__(self, "start_region", _frozen_array(self.start_region, "Scene.start_region"))
+        obstacles = tuple(self.obstacles)
+        for index, obstacle in enumerate(obstacles):
+            if not isinstance(obstacle, (PolygonObstacle, CircleObstacle)):
+                raise SceneError(
+                    f"Scene.obstacles[{index}]: expected a PolygonObstacle or CircleObstacle, "
+                    f"got {type(obstacle).__name__}"
+                )
+        object.__setattr__(self, "obstacles", obstacles)
+        object.__setattr__(self, "tags", dict(self.tags))
+
+    # ------------------------------------------------------------------ construction and I/O
+
+    @classmethod
+    def from_dict(
+        cls,
+        data: Any,
+        *,
+        source: str = "<dict>",
+        vehicle: VehicleSpec | None = None,
+        capacity: SceneCapacity | None = None,
+    ) -> Scene:
+        """Build and validate a scene from its JSON-shaped dict (SPEC §10).
+
+        Parameters
+        ----------
+        data
+            The parsed JSON object.
+        source
+            Where ``data`` came from; it opens every error message.
+        vehicle
+            Vehicle whose footprint at the target must be free; default `VehicleSpec()`.
+        capacity
+            If given, the scene must also fit these observation limits (`CapacityError` otherwise).
+
+        Raises
+        ------
+        SceneError
+            On any malformed, degenerate, self-intersecting or colliding content; `CapacityError` on capacity.
+        """
+        scene = _parse_scene(data, source)
+        scene.validate(source=source, vehicle=vehicle, capacity=capacity)
+        return scene
+
+    def to_dict(self) -> dict:
+        """JSON-safe dict (plain floats and lists, fixed key order) that `from_dict` turns back into this scene."""
+        out: dict[str, Any] = {
+            "version": int(self.version),
+            "name": self.name,
+            "tags": {key: self.tags[key] for key in sorted(self.tags)},
+            "boundary": self.boundary.tolist(),
+            "obstacles": [_obstacle_to_dict(obstacle) for obstacle in self.obstacles],
+            "target": self.target.tolist(),
+        }
+        if self.start_region is not None:
+            out["start_region"] = self.start_region.tolist()
+        return out
+
+    @classmethod
+    def load(
+        cls,
+        path: str | Path,
+        *,
+        vehicle: VehicleSpec | None = None,
+        capacity: SceneCapacity | None = None,
+    ) -> Scene:
+        """Read and validate a scene JSON file; errors name the file (see `from_dict` for the arguments)."""
+        source = str(path)
+        text = Path(path).read_text(encoding="utf-8")
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as error:
+            raise SceneError(
+                f"{source}: invalid JSON at line {error.lineno}, column {error.colno}: {error.msg}"
+            ) from None
+        return cls.from_dict(data, source=source, vehicle=vehicle, capacity=capacity)
+
+    def save(self, path: str | Path) -> None:
+        """Write the scene as JSON (indent 2, fixed key order, one point per line) to ``path``."""
+        Path(path).write_text(_format_json(self.to_dict()) + "\n", encoding="utf-8")
+
+    # ------------------------------------------------------------------ validation
+
+    def validate(
+        self,
+        *,
+        source: str = "<scene>",
+        vehicle: VehicleSpec | None = None,
+        capacity: SceneCapacity | None = None,
+    ) -> None:
+        """Check the geometry: simple non-degenerate polygons, positive radii, version, free target footprint.
+
+        ``from_dict``/``load`` call this; call it yourself on scenes built in code. With ``capacity`` the
+        observation limits are checked too (before the target, so a too-large scene fails on capacity).
+
+        Raises
+        ------
+        SceneError
+            Naming ``source``, the field path and what was expected; `CapacityError` for capacity.
+        """
+        if self.version != SCENE_FORMAT_VERSION:
+            raise SceneError(f"{source}: version: expected {SCENE_FORMAT_VERSION}, got {self.version!r}")
+        if not np.all(np.isfinite(self.target)):
+            raise SceneError(f"{source}: target: expected finite numbers, got {self.target.tolist()}")
+        boundary = _check_polygon(self.boundary, source, "boundary")
+        for index, obstacle in enumerate(self.obstacles):
+            if isinstance(obstacle, PolygonObstacle):
+                _check_polygon(obstacle.vertices, source, f"obstacles[{index}].polygon")
+            else:
+                where = f"obstacles[{index}].circle"
+                if not np.all(np.isfinite(obstacle.center)) or not math.isfinite(obstacle.radius):
+                    raise SceneError(f"{source}: {where}: expected finite numbers")
+                if obstacle.radius <= 0.0:
+                    raise SceneError(f"{source}: {where}[2]: expected a radius > 0, got {obstacle.radius!r}")
+        if self.start_region is not None:
+            _check_polygon(self.start_region, source, "start_region")
+        if capacity is not None:
+            self.check_capacity(capacity, source=source)
+        self._check_target(boundary, vehicle if vehicle is not None else VehicleSpec(), source)
+
+    def _check_target(self, boundary: ShapelyPolygon, vehicle: VehicleSpec, source: str) -> None:
+        """Raise SceneError unless the target footprint is strictly inside the boundary and clear of every obstacle."""
+        footprint = ShapelyPolygon(vehicle.footprint(self.target))
+        pose = ", ".join(f"{value:g}" for value in self.target)
+        if not boundary.contains_properly(footprint):
+            raise SceneError(
+                f"{source}: target: the vehicle footprint at ({pose}) must lie strictly inside the boundary, "
+                "but it touches or crosses it"
+            )
+        for index, obstacle in enumerate(self.obstacles):
+            if isinstance(obstacle, PolygonObstacle):
+                hit = not footprint.disjoint(ShapelyPolygon(obstacle.vertices))
+                kind = "polygon"
+            else:
+                hit = footprint.distance(Point(obstacle.center)) <= obstacle.radius
+                kind = "circle"
+            if hit:
+                raise SceneError(
+                    f"{source}: target: the vehicle footprint at ({pose}) must be disjoint from every obstacle, "
+                    f"but it touches or overlaps obstacles[{index}] ({kind})"
+                )
+
+    def check_capacity(self, capacity: SceneCapacity, *, source: str = "<scene>") -> None:
+        """Raise `CapacityError` naming the limit and the count if the scene exceeds ``capacity`` (never truncates)."""
+        if len(self.obstacles) > capacity.max_obstacles:
+            raise CapacityError(
+                f"{source}: obstacles: {len(self.obstacles)} obstacles exceed "
+                f"SceneCapacity.max_obstacles = {capacity.max_obstacles}"
+            )
+        for index, obstacle in enumerate(self.obstacles):
+            if isinstance(obstacle, PolygonObstacle):
+                count, where, note = len(obstacle.vertices), f"obstacles[{index}].polygon", ""
+            else:
+                count, where, note = 8, f"obstacles[{index}].circle", " (a circle is observed as its octagon)"
+            if count > capacity.max_polygon_vertices:
+                raise CapacityError(
+                    f"{source}: {where}: {count} vertices{note} exceed "
+                    f"SceneCapacity.max_polygon_vertices = {capacity.max_polygon_vertices}"
+                )
+        if len(self.boundary) > capacity.max_boundary_segments:
+            raise CapacityError(
+                f"{source}: boundary: {len(self.boundary)} segments exceed "
+                f"SceneCapacity.max_boundary_segments = {capacity.max_boundary_segments}"
+            )
+
+    # ------------------------------------------------------------------ derived geometry
+
+    def polygons_for_observation(self) -> list[np.ndarray]:
+        """Per obstacle in scene order, its (k, 2) vertices; circles as their octagon (paper App. A)."""
+        return [o.vertices if isinstance(o, PolygonObstacle) else o.octagon() for o in self.obstacles]
+
+    def polygons_for_rays(self) -> list[np.ndarray]:
+        """Per obstacle in scene order, its (k, 2) vertices; circles as their 16-vertex ring (paper App. A)."""
+        return [o.vertices if isinstance(o, PolygonObstacle) else o.ring(16) for o in self.obstacles]
+
+    def boundary_segments(self) -> np.ndarray:
+        """(B, 4) boundary segments x0, y0, x1, y1; segment i joins vertex i to vertex i+1, the last closes the ring."""
+        return np.concatenate([self.boundary, np.roll(self.boundary, -1, axis=0)], axis=1)
+
+
+# ---------------------------------------------------------------------- parsing helpers
+
+_TOP_LEVEL_KEYS = ("version", "name", "tags", "boundary", "obstacles", "target", "start_region")
+_REQUIRED_KEYS = ("boundary", "obstacles", "target")
+
+
+def _type_name(value: Any) -> str:
+    """JSON-flavoured name of a value's type for error messages."""
+    names = {bool: "boolean", int: "integer", float: "number", str: "string", list: "list", dict: "object"}
+    return "null" if value is None else names.get(type(value), type(value).__name__)
+
+
+def _describe(value: Any) -> str:
+    """Short ``type value`` description of what came, for error messages."""
+    text = repr(value)
+    if len(text) > 60:
+        text = text[:57] + "..."
+    return f"{_type_name(value)} {text}"
+
+
+def _is_sequence(value: Any) -> bool:
+    """True for the list-like containers a point list may arrive as (JSON lists, tuples, numpy arrays)."""
+    if isinstance(value, np.ndarray):
+        return value.ndim >= 1
+    return isinstance(value, (list, tuple))
+
+
+def _number(value: Any, source: str, where: str) -> float:
+    """A finite real number (not a boolean), else SceneError."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise SceneError(f"{source}: {where}: expected a number, got {_describe(value)}")
+    if not math.isfinite(value):
+        raise SceneError(f"{source}: {where}: expected a finite number, got {value!r}")
+    return float(value)
+
+
+def _numbers(value: Any, count: int, source: str, where: str, what: str) -> list[float]:
+    """A list of exactly ``count`` finite numbers, else SceneError naming ``what`` was expected."""
+    if not _is_sequence(value) or len(value) != count:
+        raise SceneError(f"{source}: {where}: expected {what}, got {_describe(value)}")
+    return [_number(item, source, f"{where}[{i}]") for i, item in enumerate(value)]
+
+
+def _points(value: Any, source: str, where: str) -> np.ndarray:
+    """A list of [x, y] pairs as an (n, 2) float64 array (no geometric checks yet), else SceneError."""
+    if not _is_sequence(value):
+        raise SceneError(f"{source}: {where}: expected a list of [x, y] points, got {_describe(value)}")
+    rows = [_numbers(point, 2, source, f"{where}[{i}]", "an [x, y] pair") for i, point in enumerate(value)]
+    return np.array(rows, dtype=np.float64).reshape(len(rows), 2)
+
+
+def _check_keys(data: dict, allowed: tuple[str, ...], required: tuple[str, ...], source: str, where: str) -> None:
+    """SceneError on a missing required key or an unknown key of ``data``."""
+    prefix = f"{where}." if where else ""
+    for key in data:
+        if key not in allowed:
+            raise SceneError(
+                f"{source}: {prefix}{key}: unknown field; expected only {', '.join(allowed)}"
+            )
+    for key in required:
+        if key not in data:
+            raise SceneError(f"{source}: {prefix}{key}: missing required field")
+
+
+def _parse_obstacle(data: Any, source: str, where: str) -> Obstacle:
+    """One ``{"polygon": [...]}`` or ``{"circle": [cx, cy, r]}`` entry (shape and type checks only)."""
+    if not isinstance(data, dict):
+        raise SceneError(
+            f'{source}: {where}: expected an object {{"polygon": [...]}} or {{"circle": [cx, cy, r]}}, '
+            f"got {_describe(data)}"
+        )
+    _check_keys(data, ("polygon", "circle"), (), source, where)
+    if len(data) != 1:
+        raise SceneError(
+            f'{source}: {where}: expected exactly one of "polygon" or "circle", got {sorted(data) or "none"}'
+        )
+    if "polygon" in data:
+        return PolygonObstacle(_points(data["polygon"], source, f"{where}.polygon"))
+    cx, cy, radius = _numbers(data["circle"], 3, source, f"{where}.circle", "a [cx, cy, r] triple")
+    return CircleObstacle(np.array([cx, cy]), radius)
+
+
+def _parse_scene(data: Any, source: str) -> Scene:
+    """Types, shapes and keys of a scene dict into a `Scene`; geometry is checked by `Scene.validate`."""
+    if not isinstance(data, dict):
+        raise SceneError(f"{source}: expected a JSON object at the top level, got {_describe(data)}")
+    _check_keys(data, _TOP_LEVEL_KEYS, _REQUIRED_KEYS, source, "")
+    version = data.get("version", SCENE_FORMAT_VERSION)
+    if isinstance(version, bool) or not isinstance(version, int) or version != SCENE_FORMAT_VERSION:
+        raise SceneError(f"{source}: version: expected {SCENE_FORMAT_VERSION}, got {_describe(version)}")
+    name = data.get("name", "")
+    if not isinstance(name, str):
+        raise SceneError(f"{source}: name: expected a string, got {_describe(name)}")
+    tags = data.get("tags", {})
+    if not isinstance(tags, dict):
+        raise SceneError(f"{source}: tags: expected an object of string/number values, got {_describe(tags)}")
+    for key, value in tags.items():
+        if not isinstance(key, str):
+            raise SceneError(f"{source}: tags: expected string keys, got {_describe(key)}")
+        if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+            raise SceneError(f"{source}: tags.{key}: expected a string or number, got {_describe(value)}")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise SceneError(f"{source}: tags.{key}: expected a finite number, got {value!r}")
+    boundary = _points(data["boundary"], source, "boundary")
+    obstacles_data = data["obstacles"]
+    if not _is_sequence(obstacles_data):
+        raise SceneError(f"{source}: obstacles: expected a list of obstacle objects, got {_describe(obstacles_data)}")
+    obstacles = tuple(_parse_obstacle(item, source, f"obstacles[{i}]") for i, item in enumerate(obstacles_data))
+    target = _numbers(data["target"], 3, source, "target", "an [x, y, theta] pose")
+    start_data = data.get("start_region")
+    start_region = None if start_data is None else _points(start_data, source, "start_region")
+    return Scene(
+        boundary=boundary,
+        obstacles=obstacles,
+        target=np.array(target),
+        start_region=start_region,
+        name=name,
+        tags=tags,
+        version=version,
+    )
+
+
+_LOCATION = re.compile(r"\[\s*([-+0-9.eE]+)\s+([-+0-9.eE]+)\s*\]")
+
+
+def _check_polygon(vertices: np.ndarray, source: str, where: str) -> ShapelyPolygon:
+    """SceneError unless ``vertices`` form a simple polygon with >= 3 distinct consecutive vertices and area > 0."""
+    n = len(vertices)
+    if n < 3:
+        raise SceneError(f"{source}: {where}: expected a polygon with at least 3 vertices, got {n}")
+    if not np.all(np.isfinite(vertices)):
+        raise SceneError(f"{source}: {where}: expected finite coordinates")
+    for i in range(n):
+        j = (i + 1) % n
+        if np.array_equal(vertices[i], vertices[j]):
+            point = f"({vertices[i][0]:g}, {vertices[i][1]:g})"
+            if j == 0:
+                raise SceneError(
+                    f"{source}: {where}[{i}]: degenerate polygon: the last vertex {point} repeats {where}[0]; "
+                    "list each vertex once (the ring closes itself)"
+                )
+            raise SceneError(
+                f"{source}: {where}[{j}]: degenerate polygon: vertex {point} repeats {where}[{i}]; "
+                "expected consecutive vertices to differ"
+            )
+    if MultiPoint(vertices).convex_hull.area == 0.0:
+        raise SceneError(f"{source}: {where}: degenerate polygon: zero area (all {n} vertices are collinear)")
+    polygon = ShapelyPolygon(vertices)
+    if not polygon.is_valid:
+        reason = shapely.is_valid_reason(polygon)
+        match = _LOCATION.search(reason)
+        at = f" at ({float(match.group(1)):g}, {float(match.group(2)):g})" if match else ""
+        raise SceneError(
+            f"{source}: {where}: expected a simple polygon, but it self-intersects{at} (shapely: {reason})"
+        )
+    return polygon
+
+
+def _obstacle_to_dict(obstacle: Obstacle) -> dict:
+    """JSON form of one obstacle."""
+    if isinstance(obstacle, PolygonObstacle):
+        return {"polygon": obstacle.vertices.tolist()}
+    return {"circle": [float(obstacle.center[0]), float(obstacle.center[1]), float(obstacle.radius)]}
+
+
+def _format_json(value: Any, level: int = 0) -> str:
+    """JSON text with indent 2 where lists of numbers (points, poses, circles) stay on one line."""
+    pad, inner = "  " * level, "  " * (level + 1)
+    if isinstance(value, dict) and value:
+        items = [f"{inner}{json.dumps(key)}: {_format_json(item, level + 1)}" for key, item in value.items()]
+        return "{\n" + ",\n".join(items) + "\n" + pad + "}"
+    if isinstance(value, list) and value and not all(isinstance(item, (int, float)) for item in value):
+        items = [inner + _format_json(item, level + 1) for item in value]
+        return "[\n" + ",\n".join(items) + "\n" + pad + "]"
+    return json.dumps(value, allow_nan=False)

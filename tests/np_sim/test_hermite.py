@@ -1,0 +1,156 @@
+"""Hermite connector: eq:hermite, eq:hermite-kappa, eq:mincost and the fixed/ensemble selection rules."""
+
+import math
+
+import numpy as np
+import pytest
+from shapely.geometry import Point, Polygon
+
+from np_sim.config import ConnectorConfig
+from np_sim.frames import from_target_frame, pose_to_target_frame
+from np_sim.hermite import _candidate_sets, connect, discrete_curvature, hermite_curve
+from np_sim.scene import Scene
+
+OPEN_LOT = {"boundary": [[-20, -25], [20, -25], [20, 25], [-20, 25]], "obstacles": [], "target": [0.0, 0.0, math.pi / 2]}
+
+
+def analytic_curvature(g0, g1, d0, d1, t):
+    """|x'y'' − y'x''| / |g'|³ of the cubic Hermite curve, from its exact derivatives."""
+    g0, g1, d0, d1 = map(np.asarray, (g0, g1, d0, d1))
+    d1t = (6 * t**2 - 6 * t)[:, None] * g0 + (6 * t - 6 * t**2)[:, None] * g1 + (3 * t**2 - 4 * t + 1)[:, None] * d0 + (3 * t**2 - 2 * t)[:, None] * d1
+    d2t = (12 * t - 6)[:, None] * g0 + (6 - 12 * t)[:, None] * g1 + (6 * t - 4)[:, None] * d0 + (6 * t - 2)[:, None] * d1
+    cross = d1t[:, 0] * d2t[:, 1] - d1t[:, 1] * d2t[:, 0]
+    return np.abs(cross) / np.linalg.norm(d1t, axis=1) ** 3
+
+
+def test_hermite_curve_endpoints_and_tangents():
+    g0, g1, d0, d1 = [1.0, 2.0], [4.0, -1.0], [3.0, 0.5], [-1.0, 2.0]
+    pts = hermite_curve(g0, g1, d0, d1, n=20001)
+    np.testing.assert_allclose(pts[0], g0)
+    np.testing.assert_allclose(pts[-1], g1)
+    dt = 1 / 20000
+    np.testing.assert_allclose((pts[1] - pts[0]) / dt, d0, atol=1e-3)
+    np.testing.assert_allclose((pts[-1] - pts[-2]) / dt, d1, atol=1e-3)
+    # hand evaluation at t = 0.5: h00 = h01 = 1/2, h10 = 1/8, h11 = −1/8
+    mid = hermite_curve(g0, g1, d0, d1, n=3)[1]
+    np.testing.assert_allclose(mid, 0.5 * np.array(g0) + 0.5 * np.array(g1) + (np.array(d0) - np.array(d1)) / 8)
+
+
+def test_discrete_curvature_of_a_circle_like_curve():
+    # quarter circle of radius R approximated by a cubic (tangent magnitude (4/3)(√2 − 1)·3·R... = 1.6569 R)
+    R = 5.0
+    m = 4 * (math.sqrt(2) - 1) / 3 * 3 * R
+    g0, g1, d0, d1 = [R, 0.0], [0.0, R], [0.0, m], [-m, 0.0]
+    pts = hermite_curve(g0, g1, d0, d1, n=100)
+    kbar, dk, length = discrete_curvature(pts, kappa0=1 / R)
+    assert kbar.shape == (98,)
+    np.testing.assert_allclose(kbar, 1 / R, rtol=0.03)
+    assert length == pytest.approx(math.pi * R / 2, rel=1e-3)
+    # Δκ_H is |κ0 − κ̄_0| plus the total variation of κ̄ (hand formula on the array)
+    assert dk == pytest.approx(abs(1 / R - kbar[0]) + np.abs(np.diff(kbar)).sum(), rel=1e-12)
+    # with many samples the discrete curvature converges to the exact curvature of the cubic
+    n = 4000
+    fine = hermite_curve(g0, g1, d0, d1, n=n)
+    kbar_f, _, _ = discrete_curvature(fine, 0.0)
+    t_mid = (np.arange(n - 2) + 1) / (n - 1)
+    np.testing.assert_allclose(kbar_f, analytic_curvature(g0, g1, d0, d1, t_mid), rtol=2e-3)
+
+
+def test_discrete_curvature_of_a_straight_segment():
+    pts = np.stack([np.linspace(0, 3, 100), np.linspace(0, 4, 100)], axis=1)
+    kbar, dk, length = discrete_curvature(pts, kappa0=-0.3)
+    np.testing.assert_allclose(kbar, 0.0, atol=1e-9)
+    assert dk == pytest.approx(0.3)  # |κ0 − κ̄_0| with signed κ0
+    assert length == pytest.approx(5.0)
+
+
+def test_gate_direction_and_terminal_tolerance():
+    scene = Scene.from_dict(OPEN_LOT)
+    assert connect(scene, [3.0, -8.0, -math.pi / 2], 0.0) is None  # sin θ̃ < 0: gate closed
+    below = connect(scene, [1.0, -8.0, math.pi / 2], 0.0)
+    above = connect(scene, [1.0, 8.0, math.pi / 2], 0.0)
+    assert below.forward and not above.forward  # forward tangents iff ỹ < 0
+    for c in (below, above):
+        np.testing.assert_allclose(c.points[0], [1.0, c.points[0, 1]])
+        end_t = pose_to_target_frame(c.terminal_pose, scene.target)
+        assert abs(end_t[0]) <= 0.1 + 1e-12 and abs(end_t[1]) < 1e-12
+        assert abs(math.degrees(end_t[2] - math.pi / 2)) <= 10 + 1e-9
+        assert c.kbar_max <= 0.68
+        # the reported cost is eq:mincost of the reported Δκ_H, L_H
+        assert c.cost == pytest.approx(10 * c.delta_kappa + 10 * c.length + 5)
+
+
+def test_curvature_bound_rejects_tight_connections():
+    scene = Scene.from_dict(OPEN_LOT)
+    # 1.5 m beside the target and facing it sideways: every cubic needs κ̄ > 0.68
+    assert connect(scene, [1.5, -0.5, math.pi / 2 - 0.2], 0.0) is None
+
+
+def _brute_force_selection(scene, pose, prev_kappa, mode):
+    """Check every candidate with shapely (reference-point convention) and pick by eq:mincost / first feasible."""
+    cfg = ConnectorConfig(mode=mode)
+    cands = _candidate_sets(cfg)
+    pose_t = pose_to_target_frame(np.asarray(pose, float), scene.target)
+    if not math.sin(pose_t[2]) > 0:
+        return -1
+    n = cands.build(pose_t, prev_kappa, bool(pose_t[1] < 0))
+    boundary = Polygon(scene.boundary)
+    obstacles = [Polygon(v) for v in scene.polygons_for_rays()]
+    circles = [o for o in scene.obstacles if hasattr(o, "radius")]
+    feasible = []
+    for c in range(n):
+        if not cands.kbar_max[c] <= 0.68:
+            continue
+        world = from_target_frame(cands.pts[c].T, scene.target)
+        ok = all(
+            boundary.contains(Point(p))
+            and not any(poly.intersects(Point(p)) for poly, o in zip(obstacles, scene.obstacles) if not hasattr(o, "radius"))
+            and all(math.dist(p, ci.center) > ci.radius for ci in circles)
+            for p in world
+        )
+        if ok:
+            feasible.append(c)
+    if not feasible:
+        return -1
+    if mode == "fixed":
+        return feasible[0]
+    costs = cands.costs[:n]
+    return min(feasible, key=lambda c: (costs[c], c))
+
+
+@pytest.mark.parametrize("mode", ["ensemble", "fixed"])
+def test_selection_equals_checking_every_candidate(mode):
+    from np_sim.examples import example_scenes
+
+    rng = np.random.default_rng(7)
+    checked = found = 0
+    for scene in example_scenes():
+        tx, ty, tth = scene.target
+        for _ in range(40):
+            # poses 2–10 m from the target, heading roughly towards its heading, in target-frame terms
+            r, ang = rng.uniform(2, 10), rng.uniform(-math.pi, math.pi)
+            pose = np.array([tx + r * math.cos(ang), ty + r * math.sin(ang), tth + rng.normal(0, 0.6)])
+            pose_t = pose_to_target_frame(pose, scene.target)
+            expected = _brute_force_selection(scene, pose, 0.2, mode)
+            got = connect(scene, pose, 0.2, mode)
+            assert (got.index if got else -1) == expected, (scene.name, pose.tolist(), pose_t.tolist())
+            checked += 1
+            found += got is not None
+    assert checked >= 100 and found >= 10  # the feasible branch is exercised
+
+
+def test_fixed_connector_takes_first_feasible_in_offset_then_heading_order():
+    # a block left of the final approach: candidates 0 (−0.1 m, 80°) and 1 (−0.1 m, 90°) pass through it,
+    # candidate 2 (−0.1 m, 100°) swings right of it
+    data = dict(OPEN_LOT, obstacles=[{"polygon": [[-1.0, -2.0], [-0.07, -2.0], [-0.07, -0.95], [-1.0, -0.95]]}])
+    scene = Scene.from_dict(data)
+    start = [0.0, -8.0, math.pi / 2]
+    open_c = connect(Scene.from_dict(OPEN_LOT), start, 0.0, "fixed")
+    assert open_c.index == 0 and open_c.offset_m == -0.1 and math.isclose(open_c.heading_rad, math.radians(80))
+    c = connect(scene, start, 0.0, "fixed")
+    assert c.index == 2 and c.offset_m == -0.1 and math.isclose(c.heading_rad, math.radians(100))
+    assert c.scales == (1.0, 1.0)
+    assert c.index == _brute_force_selection(scene, start, 0.0, "fixed")
+    # the ensemble picks by cost instead: the straight (0 m, 90°) family is cheaper than candidate 2
+    e = connect(scene, start, 0.0, "ensemble")
+    assert e.cost < c.cost and e.offset_m == 0.0
