@@ -13,6 +13,7 @@ from np_sim.config import EnvConfig
 from np_sim.errors import ConfigError
 from np_sim.kernels import step as K
 from np_sim.kernels.collision import pose_valid
+from np_sim.kernels.geometry import beam_offsets
 from np_sim.kernels.hermite import hermite_basis
 from np_sim.lidar import footprint_ranges
 from np_sim.observation import observation_size, static_slots
@@ -80,6 +81,7 @@ class BatchCore:
         self.P = kernel_parameters(config)
         self.local = config.vehicle.footprint_local()
         self.b_ranges = footprint_ranges(config.vehicle, config.observation.n_beams)
+        self.off_c, self.off_s = beam_offsets(config.observation.n_beams)
         self.sampler = UniformStartSampler(self.scenes, config.vehicle, arrays=self.arrays) if start_sampler is None else start_sampler
         cn = config.connector
         self.offsets, self.headings, self.scales0, self.scales1 = cn.arrays()
@@ -120,7 +122,8 @@ class BatchCore:
             self.S[i] = 0.0
             self.S[i, K.S_X : K.S_TH + 1] = pose
             self.S[i, K.S_SCENE] = k
-        K.observe_batch(self.geo, self.arrays.targets, self.static_obs, self.S, self.P, self.b_ranges, env_ids, self.obs)
+        K.observe_batch(self.geo, self.arrays.targets, self.static_obs, self.S, self.P, self.b_ranges, self.off_c,
+                        self.off_s, env_ids, self.obs)
 
     def step(self, actions: np.ndarray) -> None:
         """Advance every env by its normalised action row; fills ``obs`` and ``R``."""
@@ -134,8 +137,9 @@ class BatchCore:
                 "(the env never clips; clip or squash in the policy)"
             )
         K.step_batch(self.geo, self.arrays.targets, self.static_obs, self.S, self.P, np.ascontiguousarray(a),
-                     self.local, self.b_ranges, self.offsets, self.headings, self.scales0, self.scales1, self.basis,
-                     self.dbasis, self.h_pts, self.h_kbar_max, self.h_dk, self.h_len, self.h_cost, self.obs, self.R)
+                     self.local, self.b_ranges, self.off_c, self.off_s, self.offsets, self.headings, self.scales0,
+                     self.scales1, self.basis, self.dbasis, self.h_pts, self.h_kbar_max, self.h_dk, self.h_len,
+                     self.h_cost, self.obs, self.R)
 
     def episode_metrics(self) -> dict[str, np.ndarray]:
         """Per env, the paper's eq:metrics of the episode so far including a Hermite segment of the last step:

@@ -97,24 +97,63 @@ def ray_segment_distance(
     return np.inf
 
 
+ATAN_APPROX_MAX_ERR = 1e-4
+"""Bound (rad) on the error of ``_atan2_approx``, with margin; it only chooses which beams to test exactly."""
+
+
 @njit(cache=True, error_model="numpy")
-def cast_beams(
+def _atan2_approx(y: float, x: float) -> float:
+    """atan2 to within 1e-5 rad (odd minimax polynomial on [0, 1] plus octant folding)."""
+    ax = abs(x)
+    ay = abs(y)
+    if ax == 0.0 and ay == 0.0:
+        return 0.0
+    swap = ay > ax
+    z = ax / ay if swap else ay / ax
+    z2 = z * z
+    a = z * (0.9998660 + z2 * (-0.3302995 + z2 * (0.1801410 + z2 * (-0.0851330 + z2 * 0.0208351))))
+    if swap:
+        a = 0.5 * math.pi - a
+    if x < 0.0:
+        a = math.pi - a
+    return -a if y < 0.0 else a
+
+
+@njit(cache=True, error_model="numpy")
+def beam_offsets(n_beams: int):
+    """(cos, sin) of the beam offsets 2πi/n, i = 0..n−1, relative to the heading."""
+    c = np.empty(n_beams)
+    s = np.empty(n_beams)
+    for i in range(n_beams):
+        c[i] = math.cos(2.0 * math.pi * i / n_beams)
+        s[i] = math.sin(2.0 * math.pi * i / n_beams)
+    return c, s
+
+
+@njit(cache=True, error_model="numpy")
+def cast_beams_offsets(
     ox: float,
     oy: float,
     heading: float,
     segs: np.ndarray,
     n_segs: int,
-    n_beams: int,
+    off_c: np.ndarray,
+    off_s: np.ndarray,
     max_range: float,
     out: np.ndarray,
 ) -> None:
-    """First-hit distances of ``n_beams`` rays over 360° into ``out`` (capped at ``max_range``).
+    """First-hit distances of the beams with offset directions (off_c, off_s) (from ``beam_offsets``) into
+    ``out``, capped at ``max_range``; beam i points along the heading rotated by its offset.
 
-    Beam i points at ``heading + 2πi/n_beams`` (beam 0 along the heading, counter-clockwise). ``segs[:n_segs]``
-    holds (x0, y0, x1, y1) rows. For speed each segment only tests the beams inside its angular span (plus one
-    beam of margin each side); the hit test itself is the exact ``ray_segment_distance``.
+    ``segs[:n_segs]`` holds (x0, y0, x1, y1) rows. For speed each segment only tests the beams inside its angular
+    span (from an approximate atan2, widened by one beam plus the approximation error each side); the hit test
+    itself is the exact ``ray_segment_distance``, so the result equals testing every beam against every segment.
     """
+    n_beams = out.shape[0]
     step = 2.0 * math.pi / n_beams
+    margin = 1 + int(math.ceil(ATAN_APPROX_MAX_ERR / step))
+    ch = math.cos(heading)
+    sh = math.sin(heading)
     for i in range(n_beams):
         out[i] = max_range
     for k in range(n_segs):
@@ -134,27 +173,62 @@ def cast_beams(
         cy = y0 + u * ey
         if cx * cx + cy * cy > max_range * max_range:
             continue
-        a0 = math.atan2(y0, x0) - heading
-        a1 = math.atan2(y1, x1) - heading
+        # endpoint angles relative to the heading, in the vehicle frame
+        a0 = _atan2_approx(-sh * x0 + ch * y0, ch * x0 + sh * y0)
+        a1 = _atan2_approx(-sh * x1 + ch * y1, ch * x1 + sh * y1)
         span = a1 - a0
-        span = span - 2.0 * math.pi * math.floor((span + math.pi) / (2.0 * math.pi))  # wrap to [-π, π)
-        if abs(span) >= math.pi - 1e-9:
+        if span >= math.pi:
+            span -= 2.0 * math.pi
+        elif span < -math.pi:
+            span += 2.0 * math.pi
+        if abs(span) >= math.pi - 2.0 * ATAN_APPROX_MAX_ERR:
             lo_idx = 0
             hi_idx = n_beams - 1
         else:
             lo = a0 if span >= 0.0 else a0 + span
             f_lo = lo / step
-            lo_idx = int(math.floor(f_lo)) - 1
-            hi_idx = int(math.ceil(f_lo + abs(span) / step)) + 1
+            lo_idx = int(math.floor(f_lo)) - margin
+            hi_idx = int(math.ceil(f_lo + abs(span) / step)) + margin
             if hi_idx - lo_idx >= n_beams:
                 lo_idx = 0
                 hi_idx = n_beams - 1
         for j in range(lo_idx, hi_idx + 1):
             b = j % n_beams
-            ang = heading + b * step
-            t = ray_segment_distance(0.0, 0.0, math.cos(ang), math.sin(ang), x0, y0, x1, y1)
+            dx = ch * off_c[b] - sh * off_s[b]
+            dy = sh * off_c[b] + ch * off_s[b]
+            t = ray_segment_distance(0.0, 0.0, dx, dy, x0, y0, x1, y1)
             if t < out[b]:
                 out[b] = t
+
+
+@njit(cache=True, error_model="numpy")
+def cast_beams(
+    ox: float,
+    oy: float,
+    heading: float,
+    segs: np.ndarray,
+    n_segs: int,
+    n_beams: int,
+    max_range: float,
+    out: np.ndarray,
+) -> None:
+    """First-hit distances of ``n_beams`` rays over 360° into ``out`` (capped at ``max_range``).
+
+    Beam i points at ``heading + 2πi/n_beams`` (beam 0 along the heading, counter-clockwise), its direction
+    computed as the heading's unit vector rotated by (cos 2πi/n, sin 2πi/n) (``beam_direction``).
+    """
+    off_c, off_s = beam_offsets(n_beams)
+    cast_beams_offsets(ox, oy, heading, segs, n_segs, off_c, off_s, max_range, out[:n_beams])
+
+
+@njit(cache=True, error_model="numpy")
+def beam_direction(heading: float, i: int, n_beams: int):
+    """Unit direction of beam i exactly as the casters compute it (heading vector rotated by 2πi/n)."""
+    ch = math.cos(heading)
+    sh = math.sin(heading)
+    c = math.cos(2.0 * math.pi * i / n_beams)
+    s = math.sin(2.0 * math.pi * i / n_beams)
+    return ch * c - sh * s, sh * c + ch * s
 
 
 @njit(cache=True, error_model="numpy")

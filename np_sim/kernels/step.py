@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit, prange
 
 from np_sim.kernels.collision import pose_valid
-from np_sim.kernels.geometry import cast_beams
+from np_sim.kernels.geometry import cast_beams_offsets
 from np_sim.kernels.hermite import build_candidates, select_candidate
 from np_sim.kernels.kinematics import arc_point, wrap_angle
 
@@ -35,8 +35,8 @@ from np_sim.kernels.kinematics import arc_point, wrap_angle
 
 @njit(cache=True, error_model="numpy")
 def write_observation(geo, k: int, x: float, y: float, th: float, target: np.ndarray, static_row: np.ndarray,
-                      b_ranges: np.ndarray, use_lidar: bool, lidar_range: float, lidar: np.ndarray,
-                      out: np.ndarray) -> None:
+                      b_ranges: np.ndarray, off_c: np.ndarray, off_s: np.ndarray, use_lidar: bool,
+                      lidar_range: float, lidar: np.ndarray, out: np.ndarray) -> None:
     """One flat observation: ego (x̃, ỹ, cos θ̃, sin θ̃) in the target frame (eq:target-frame), then the
     rectified LiDAR clearances max(d − b, 0) (eq:lidar-clearance) when enabled, then the scene's static
     target-frame geometry slots."""
@@ -53,7 +53,7 @@ def write_observation(geo, k: int, x: float, y: float, th: float, target: np.nda
     o = 4
     if use_lidar:
         n_beams = lidar.shape[0]
-        cast_beams(x, y, th, geo[8][k], geo[9][k], n_beams, lidar_range, lidar)
+        cast_beams_offsets(x, y, th, geo[8][k], geo[9][k], off_c, off_s, lidar_range, lidar)
         for i in range(n_beams):
             out[o + i] = max(lidar[i] - b_ranges[i], 0.0)
         o += n_beams
@@ -62,15 +62,15 @@ def write_observation(geo, k: int, x: float, y: float, th: float, target: np.nda
 
 
 @njit(parallel=True, cache=True, error_model="numpy")
-def observe_batch(geo, targets, static_obs, S, P, b_ranges, env_ids, obs):
+def observe_batch(geo, targets, static_obs, S, P, b_ranges, off_c, off_s, env_ids, obs):
     """Observations of the envs ``env_ids`` at their current poses (used after resets)."""
     n_beams = int(P[P_N_BEAMS])
     for r in prange(env_ids.shape[0]):
         i = env_ids[r]
         k = int(S[i, S_SCENE])
         lidar = np.empty(n_beams)
-        write_observation(geo, k, S[i, S_X], S[i, S_Y], S[i, S_TH], targets[k], static_obs[k], b_ranges,
-                          P[P_USE_LIDAR] > 0.0, P[P_LIDAR_RANGE], lidar, obs[i])
+        write_observation(geo, k, S[i, S_X], S[i, S_Y], S[i, S_TH], targets[k], static_obs[k], b_ranges, off_c,
+                          off_s, P[P_USE_LIDAR] > 0.0, P[P_LIDAR_RANGE], lidar, obs[i])
 
 
 @njit(cache=True, error_model="numpy")
@@ -79,7 +79,8 @@ def _sign(v: float) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, offsets, headings, scales0,
+def step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, off_c, off_s, offsets, headings,
+             scales0,
              scales1, basis, dbasis, pts, kbar_max, dk, lengths, costs, obs_row, R_row) -> None:
     """Advance env i by the arc (κ, l) (already in physical units) and write its reward, flags and observation."""
     k = int(S[i, S_SCENE])
@@ -182,13 +183,13 @@ def step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, 
     R_row[R_H_FORWARD] = h_fwd
     R_row[R_H_COST] = h_cost
     lidar = np.empty(b_ranges.shape[0])
-    write_observation(geo, k, nx, ny, nth, target, static_obs[k], b_ranges, P[P_USE_LIDAR] > 0.0,
+    write_observation(geo, k, nx, ny, nth, target, static_obs[k], b_ranges, off_c, off_s, P[P_USE_LIDAR] > 0.0,
                       P[P_LIDAR_RANGE], lidar, obs_row)
 
 
 @njit(parallel=True, cache=True, error_model="numpy")
-def step_batch(geo, targets, static_obs, S, P, actions, local, b_ranges, offsets, headings, scales0, scales1,
-               basis, dbasis, pts, kbar_max, dk, lengths, costs, obs, R) -> None:
+def step_batch(geo, targets, static_obs, S, P, actions, local, b_ranges, off_c, off_s, offsets, headings, scales0,
+               scales1, basis, dbasis, pts, kbar_max, dk, lengths, costs, obs, R) -> None:
     """Step every env by its normalised action row (a_0, a_1) ∈ [−1, 1]², mapped to κ = a_0·κ_max, l = a_1·l_max.
 
     ``pts``, ``kbar_max``, ``dk``, ``lengths``, ``costs`` are per-env Hermite scratch (leading axis = env).
@@ -196,5 +197,5 @@ def step_batch(geo, targets, static_obs, S, P, actions, local, b_ranges, offsets
     for i in prange(S.shape[0]):
         kappa = actions[i, 0] * P[P_KAPPA_MAX]
         length = actions[i, 1] * P[P_LENGTH_MAX]
-        step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, offsets, headings, scales0,
-                 scales1, basis, dbasis, pts[i], kbar_max[i], dk[i], lengths[i], costs[i], obs[i], R[i])
+        step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, off_c, off_s, offsets, headings,
+                 scales0, scales1, basis, dbasis, pts[i], kbar_max[i], dk[i], lengths[i], costs[i], obs[i], R[i])
