@@ -103,7 +103,7 @@ def bench_plain_step(scenes, config, seconds: float, seed: int) -> float | None:
 
     def new_episode():
         k = int(rng.integers(len(scenes)))
-        state.update(k=k, pose=sampler(rng, k), prev_kappa=0.0, prev_length=0.0, first=True, n_rev=0, dk_eff=0.0,
+        state.update(k=k, pose=sampler(rng, [k])[0], prev_kappa=0.0, prev_length=0.0, first=True, n_rev=0, dk_eff=0.0,
                      n_arcs=0)
 
     new_episode()
@@ -130,7 +130,8 @@ def bench_kernels(scenes, config, seed: int) -> dict[str, float]:
     local = config.vehicle.footprint_local()
     rng = np.random.default_rng(seed)
     sampler = UniformStartSampler(scenes, config.vehicle, arrays=arrays)
-    poses = [(k, sampler(rng, k)) for k in rng.integers(len(scenes), size=64)]
+    ks = rng.integers(len(scenes), size=64)
+    poses = list(zip(ks, sampler(rng, ks)))
 
     # one 30-sample arc check (sampling + reference-point checks)
     buf = np.empty((config.episode.samples_per_arc, 3))

@@ -99,29 +99,32 @@ class BatchCore:
 
     # ------------------------------------------------------------------------------------------------------------
     def reset_envs(self, env_ids: np.ndarray, rng: np.random.Generator, scene_index=None, start=None) -> None:
-        """Start new episodes in ``env_ids``: scene uniformly at random (or ``scene_index``), start from the
-        sampler (or ``start`` rows, which must be valid under the collision convention)."""
+        """Start new episodes in ``env_ids``: scenes uniformly at random (or ``scene_index``: one index or one per
+        env), starts from the sampler (or ``start``: one pose or one per env, which must be valid under the
+        collision convention)."""
         env_ids = np.asarray(env_ids, np.int64)
-        for r, i in enumerate(env_ids):
-            if scene_index is None:
-                k = int(rng.integers(len(self.scenes)))
-            else:
-                k = int(np.broadcast_to(np.asarray(scene_index), (len(env_ids),))[r])
-                if not 0 <= k < len(self.scenes):
-                    raise ConfigError(f"reset: scene_index {k} out of range [0, {len(self.scenes)})")
-            if start is None:
-                pose = np.asarray(self.sampler(rng, k), float)
-            else:
-                pose = np.asarray(np.asarray(start, float).reshape(-1, 3)[r if np.ndim(start) == 2 else 0], float)
+        n = len(env_ids)
+        if scene_index is None:
+            scenes = rng.integers(len(self.scenes), size=n)
+        else:
+            scenes = np.broadcast_to(np.asarray(scene_index, np.int64), (n,)).copy()
+            bad = scenes[(scenes < 0) | (scenes >= len(self.scenes))]
+            if len(bad):
+                raise ConfigError(f"reset: scene_index {int(bad[0])} out of range [0, {len(self.scenes)})")
+        if start is None:
+            poses = np.asarray(self.sampler(rng, scenes), float).reshape(n, 3)
+        else:
+            poses = np.broadcast_to(np.asarray(start, float).reshape(-1, 3), (n, 3)).copy()
+            for pose, k in zip(poses, scenes):
                 if not pose_valid(self.geo, k, pose[0], pose[1], pose[2], self.config.collision == "footprint",
                                   self.local, self._corners):
                     raise ConfigError(
                         f"reset: start pose {pose.tolist()} is in collision in scene "
                         f"{self.scenes[k].name or k!r} under the {self.config.collision} convention"
                     )
-            self.S[i] = 0.0
-            self.S[i, K.S_X : K.S_TH + 1] = pose
-            self.S[i, K.S_SCENE] = k
+        self.S[env_ids] = 0.0
+        self.S[env_ids, K.S_X : K.S_TH + 1] = poses
+        self.S[env_ids, K.S_SCENE] = scenes
         K.observe_batch(self.geo, self.arrays.targets, self.static_obs, self.S, self.P, self.b_ranges, self.off_c,
                         self.off_s, env_ids, self.obs)
 

@@ -12,17 +12,31 @@ from np_sim.kernels.geometry import INSIDE, point_in_polygon
 
 
 @njit(cache=True, error_model="numpy")
-def first_free_draw(geo, k: int, region: np.ndarray, lo: np.ndarray, hi: np.ndarray, u: np.ndarray,
-                    local: np.ndarray) -> int:
-    """Index of the first row of uniforms ``u`` (D, 3) whose pose — x, y = lo + u·(hi − lo), θ = −π + 2π u —
-    lies strictly inside ``region`` with a footprint free in scene k; −1 when none does."""
+def first_free_draws(geo, scene_idx: np.ndarray, regions: np.ndarray, n_region: np.ndarray, u: np.ndarray,
+                     local: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """For each request r (scene ``scene_idx[r]``), the first row of uniforms ``u[r]`` (D, 3) whose pose —
+    x, y = lo + u·(hi − lo) over the region's bounding box, θ = −π + 2π u — lies strictly inside the start region
+    ``regions[k, :n_region[k]]`` with a footprint free in scene k. Writes accepted poses to ``out[r]`` and returns
+    a mask of the requests that found one."""
+    found = np.zeros(u.shape[0], np.bool_)
     corners = np.empty((4, 2))
     for r in range(u.shape[0]):
-        x = lo[0] + u[r, 0] * (hi[0] - lo[0])
-        y = lo[1] + u[r, 1] * (hi[1] - lo[1])
-        th = -math.pi + 2.0 * math.pi * u[r, 2]
-        if point_in_polygon(x, y, region, region.shape[0]) != INSIDE:
-            continue
-        if footprint_valid(geo, k, x, y, th, local, corners):
-            return r
-    return -1
+        k = scene_idx[r]
+        region = regions[k, : n_region[k]]
+        lox = region[:, 0].min()
+        hix = region[:, 0].max()
+        loy = region[:, 1].min()
+        hiy = region[:, 1].max()
+        for d in range(u.shape[1]):
+            x = lox + u[r, d, 0] * (hix - lox)
+            y = loy + u[r, d, 1] * (hiy - loy)
+            th = -math.pi + 2.0 * math.pi * u[r, d, 2]
+            if point_in_polygon(x, y, region, region.shape[0]) != INSIDE:
+                continue
+            if footprint_valid(geo, k, x, y, th, local, corners):
+                out[r, 0] = x
+                out[r, 1] = y
+                out[r, 2] = th
+                found[r] = True
+                break
+    return found

@@ -12,17 +12,16 @@ def test_starts_are_footprint_free_inside_the_region_and_seeded():
     scenes = [s for s in example_scenes() if s.start_region is not None]
     sampler = UniformStartSampler(scenes)
     vehicle = VehicleSpec()
-    a = [sampler(np.random.default_rng(4), k) for k in range(len(scenes)) for _ in range(1)]
-    b = [sampler(np.random.default_rng(4), k) for k in range(len(scenes)) for _ in range(1)]
-    np.testing.assert_array_equal(a, b)
+    ks = np.arange(len(scenes)).repeat(3)
+    np.testing.assert_array_equal(sampler(np.random.default_rng(4), ks), sampler(np.random.default_rng(4), ks))
+    assert sampler(np.random.default_rng(4), ks).shape == (len(ks), 3)
     rng = np.random.default_rng(0)
     for k, scene in enumerate(scenes):
         region, boundary = Polygon(scene.start_region), Polygon(scene.boundary)
         obstacles = [Polygon(o.vertices) if hasattr(o, "vertices") else Point(o.center).buffer(o.radius, 64)
                      for o in scene.obstacles]
         headings = []
-        for _ in range(50):
-            pose = sampler(rng, k)
+        for pose in sampler(rng, np.full(50, k)):
             rect = Polygon(vehicle.footprint(pose))
             assert region.contains(Point(pose[:2]))
             assert boundary.contains(rect)
