@@ -15,6 +15,15 @@ def wrap_angle(a: float) -> float:
 
 
 @njit(cache=True, error_model="numpy")
+def _sinc(x: float) -> float:
+    """sin(x)/x, with its Taylor series near 0 (exact to double precision for |x| < 1e-4)."""
+    if abs(x) < 1e-4:
+        x2 = x * x
+        return 1.0 - x2 / 6.0 + x2 * x2 / 120.0
+    return math.sin(x) / x
+
+
+@njit(cache=True, error_model="numpy")
 def arc_point(x: float, y: float, th: float, kappa: float, length: float):
     """Pose reached by the arc (κ, l) from (x, y, θ), paper eq:arc; κ = 0 is a straight segment of length l.
 
@@ -22,19 +31,20 @@ def arc_point(x: float, y: float, th: float, kappa: float, length: float):
     x' = x + δ_l [r(1 − cos α) δ_κ sin θ + r sin α cos θ],
     y' = y + δ_l [−r(1 − cos α) δ_κ cos θ + r sin α sin θ],
     θ' = θ − δ_κ α.
+    Evaluated without cancellation or overflow as r sin α = |l|·sinc(α) and
+    r(1 − cos α) = 2 sin²(α/2)/|κ| = |l|·(α/2)·sinc²(α/2), which also gives the straight segment at κ = 0.
     """
-    if kappa == 0.0:
-        return x + length * math.cos(th), y + length * math.sin(th), wrap_angle(th)
-    r = 1.0 / abs(kappa)
+    abs_l = abs(length)
     alpha = abs(length * kappa)
     d_l = 1.0 if length > 0.0 else (-1.0 if length < 0.0 else 0.0)
-    d_k = 1.0 if kappa > 0.0 else -1.0
+    d_k = 1.0 if kappa > 0.0 else (-1.0 if kappa < 0.0 else 0.0)
+    along = abs_l * _sinc(alpha)  # r sin α
+    half_sinc = _sinc(0.5 * alpha)
+    across = abs_l * 0.5 * alpha * half_sinc * half_sinc  # r (1 − cos α)
     s = math.sin(th)
     c = math.cos(th)
-    one_minus_cos = 1.0 - math.cos(alpha)
-    sin_a = math.sin(alpha)
-    nx = x + d_l * (r * one_minus_cos * d_k * s + r * sin_a * c)
-    ny = y + d_l * (-r * one_minus_cos * d_k * c + r * sin_a * s)
+    nx = x + d_l * (across * d_k * s + along * c)
+    ny = y + d_l * (-across * d_k * c + along * s)
     return nx, ny, wrap_angle(th - d_k * alpha)
 
 
