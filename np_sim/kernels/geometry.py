@@ -1,9 +1,12 @@
 """Compiled 2-D geometry kernels: strict point-in-polygon, segment intersection, ray casting, footprint tests.
 
 Each kernel is a short ``@njit(cache=True, error_model="numpy")`` function over arrays and scalars, tested against shapely in
-``tests/np_sim/kernels/test_geometry.py``. "Strict" means zero tolerance: a point on a polygon edge is neither
-inside nor outside (it is *on* the polygon), and a ray hits a segment only for segment parameter 0 < u < 1 and
-ray parameter t > 0 (paper App. A, "strict, zero-tolerance segment-bound tests").
+``tests/np_sim/kernels/test_geometry.py``. "Strict" means exact, zero tolerance (paper App. A, "strict,
+zero-tolerance segment-bound tests"): a point on a polygon edge is neither inside nor outside (it is *on* the
+polygon); a ray hits a segment when the segment parameter lies in [0, 1] exactly — no epsilon widens or shrinks
+the bounds, so a beam through a polygon corner hits it — and the ray parameter is strictly positive (the ray's
+own origin is not a hit). A ray parallel to a segment never hits it; a beam grazing an edge therefore stops at
+the corner where the next edge begins.
 """
 
 from __future__ import annotations
@@ -81,7 +84,7 @@ def ray_segment_distance(
 ) -> float:
     """Distance t > 0 along the unit ray o + t·d to segment (x0,y0)-(x1,y1), or +inf when it misses.
 
-    Solves o + t d = p0 + u (p1 - p0); a hit needs t > 0 and 0 < u < 1 strictly, parallel rays never hit.
+    Solves o + t d = p0 + u (p1 - p0); a hit needs t > 0 and 0 <= u <= 1 (exact bounds), parallel rays never hit.
     """
     ex = x1 - x0
     ey = y1 - y0
@@ -92,7 +95,7 @@ def ray_segment_distance(
     py = y0 - oy
     t = (px * ey - py * ex) / denom
     u = (px * dy - py * dx) / denom
-    if t > 0.0 and 0.0 < u < 1.0:
+    if t > 0.0 and 0.0 <= u <= 1.0:
         return t
     return np.inf
 
