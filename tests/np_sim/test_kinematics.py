@@ -243,7 +243,9 @@ def test_polyline_length_of_samples(pose, kappa, length):
 
     alpha = abs(length * kappa)
     for n in (30, 2000):
-        chords = abs(length) if kappa == 0.0 else n * 2 / abs(kappa) * math.sin(alpha / (2 * n))
+        # n·2r·sin(α/2n) written as |l|·sin(x)/x, x = α/2n, so tiny |κ| cannot overflow r = 1/|κ|
+        x = alpha / (2 * n)
+        chords = abs(length) if x == 0.0 else abs(length) * math.sin(x) / x
         assert polyline(n) == pytest.approx(chords, rel=1e-9, abs=1e-9)
     assert polyline(2000) == pytest.approx(abs(length), abs=1e-4)
     assert polyline(30) <= abs(length) + 1e-9  # chords never exceed the arc
