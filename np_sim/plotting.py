@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from matplotlib import colormaps
 from matplotlib.axes import Axes
 from matplotlib.patches import Circle
 from matplotlib.patches import Polygon as PolygonPatch
@@ -100,5 +101,40 @@ def plot_scene(ax: Axes, scene: Scene, path=None, vehicle: VehicleSpec | None = 
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_title(scene.name or "(unnamed scene)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small", frameon=False)
+    return ax
+
+
+def plot_clip(ax: Axes, clip, frames=None, vehicle: VehicleSpec | None = None) -> Axes:
+    """Draw a delivery-site clip: `plot_scene` of frame 0's detection scene (boundary, nearest ten detections,
+    target), plus spot outlines, the ground truth of frame 0, the detections of several frames with fading colour
+    (older = paler), mover tracks and the start T-marker. Returns ``ax``."""
+    vehicle = VehicleSpec() if vehicle is None else vehicle
+    frames = list(np.linspace(0, clip.n_frames - 1, 6).astype(int)) if frames is None else list(frames)
+    plot_scene(ax, clip.frame_scene(0), vehicle=vehicle)
+    for spot in clip.site.spots:
+        ax.add_patch(PolygonPatch(vehicle.footprint(spot.pose), closed=True, fill=False, edgecolor="0.8",
+                                  linewidth=0.5, linestyle=":"))
+    for k, obj in enumerate(clip.objects):
+        ax.add_patch(PolygonPatch(obj.polygon(0), closed=True, facecolor="none", edgecolor="black", linewidth=0.7,
+                                  label="ground truth (frame 0)" if k == 0 else None))
+        if obj.moving:
+            ax.plot(obj.poses[:, 0], obj.poses[:, 1], color="tab:purple", linewidth=0.8, alpha=0.7,
+                    label="mover track" if not any(o.moving for o in clip.objects[:k]) else None)
+    cmap = colormaps["Oranges"]
+    for n, frame in enumerate(frames):
+        shade = cmap(0.35 + 0.6 * (n + 1) / len(frames))
+        _, polygons = clip.detections(clip.detection_frame(frame))
+        for j, poly in enumerate(polygons):
+            ax.add_patch(PolygonPatch(poly, closed=True, facecolor="none", edgecolor=shade, linewidth=0.6,
+                                      label=f"detections t = {frame * clip.frame_dt_s:.1f} s" if j == 0 else None))
+    bar, stem = target_marker(clip.start, vehicle)
+    ax.plot(bar[:, 0], bar[:, 1], color="tab:green", linewidth=2.0, label="start")
+    ax.plot(stem[:, 0], stem[:, 1], color="tab:green", linewidth=2.0)
+    ax.add_patch(PolygonPatch(vehicle.footprint(clip.start), closed=True, fill=False, edgecolor="tab:green",
+                              linestyle="--", linewidth=1.0))
+    reasons = ", ".join(clip.difficulty.reasons) or "not difficult"
+    ax.set_title(f"{clip.name}: target {clip.site.spots[clip.target_spot].name}, difficulty: {reasons}\n"
+                 "grey: the ten detections nearest the start at t = 0 s (the planner's input)", fontsize="medium")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small", frameon=False)
     return ax

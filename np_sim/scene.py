@@ -219,7 +219,7 @@ class Scene:
 
     def save(self, path: str | Path) -> None:
         """Write the scene as JSON (indent 2, fixed key order, one point per line) to ``path``."""
-        Path(path).write_text(_format_json(self.to_dict()) + "\n", encoding="utf-8")
+        Path(path).write_text(format_json(self.to_dict()) + "\n", encoding="utf-8")
 
     # ------------------------------------------------------------------ validation
 
@@ -487,13 +487,13 @@ def _obstacle_to_dict(obstacle: Obstacle) -> dict:
     return {"circle": [float(obstacle.center[0]), float(obstacle.center[1]), float(obstacle.radius)]}
 
 
-def _format_json(value: Any, level: int = 0) -> str:
+def format_json(value: Any, level: int = 0) -> str:
     """JSON text with indent 2 where lists of numbers (points, poses, circles) stay on one line."""
     pad, inner = "  " * level, "  " * (level + 1)
     if isinstance(value, dict) and value:
-        items = [f"{inner}{json.dumps(key)}: {_format_json(item, level + 1)}" for key, item in value.items()]
+        items = [f"{inner}{json.dumps(key)}: {format_json(item, level + 1)}" for key, item in value.items()]
         return "{\n" + ",\n".join(items) + "\n" + pad + "}"
     if isinstance(value, list) and value and not all(isinstance(item, (int, float)) for item in value):
-        items = [inner + _format_json(item, level + 1) for item in value]
+        items = [inner + format_json(item, level + 1) for item in value]
         return "[\n" + ",\n".join(items) + "\n" + pad + "]"
     return json.dumps(value, allow_nan=False)
