@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from np_sim.kernels.kinematics import arc_point
 from np_sim.kernels.geometry import (
     INSIDE,
     OUTSIDE,
@@ -83,5 +84,17 @@ def poses_valid(geo, k: int, poses: np.ndarray, footprint: bool, local: np.ndarr
     corners = np.empty((4, 2))
     for i in range(poses.shape[0]):
         if not pose_valid(geo, k, poses[i, 0], poses[i, 1], poses[i, 2], footprint, local, corners):
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def arc_valid(geo, k: int, x: float, y: float, th: float, kappa: float, length: float, n_samples: int,
+              footprint: bool, local: np.ndarray, corners: np.ndarray) -> bool:
+    """The arc (κ, l) from (x, y, θ) checked at arc lengths l·j/n, j = 1..n (paper: n = 30, eq:arc), stopping at
+    the first invalid sample."""
+    for j in range(n_samples):
+        px, py, pth = arc_point(x, y, th, kappa, length * (j + 1) / n_samples)
+        if not pose_valid(geo, k, px, py, pth, footprint, local, corners):
             return False
     return True

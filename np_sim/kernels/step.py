@@ -13,7 +13,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from np_sim.kernels.collision import pose_valid
+from np_sim.kernels.collision import arc_valid
 from np_sim.kernels.geometry import cast_beams_offsets
 from np_sim.kernels.hermite import build_candidates, select_candidate
 from np_sim.kernels.kinematics import arc_point, wrap_angle
@@ -106,14 +106,8 @@ def step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, 
     S[i, S_SUM_LEN] += abs(length)
 
     # execute the arc, checked at samples_per_arc points (eq:arc)
-    n_samples = int(P[P_SAMPLES])
     corners = np.empty((4, 2))
-    valid = True
-    for j in range(n_samples):
-        px, py, pth = arc_point(x, y, th, kappa, length * (j + 1) / n_samples)
-        if not pose_valid(geo, k, px, py, pth, footprint, local, corners):
-            valid = False
-            break
+    valid = arc_valid(geo, k, x, y, th, kappa, length, int(P[P_SAMPLES]), footprint, local, corners)
     nx, ny, nth = arc_point(x, y, th, kappa, length)
     S[i, S_X] = nx
     S[i, S_Y] = ny
