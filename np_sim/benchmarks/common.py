@@ -321,3 +321,12 @@ def segment_blocked(start_xy, target_xy, obstacles_union) -> bool:
     """True when the straight segment from ``start_xy`` to ``target_xy`` touches an obstacle (the "direct
     approach" of the paper §IV-A Topology-Stress families)."""
     return bool(LineString([tuple(start_xy), tuple(target_xy)]).intersects(obstacles_union))
+
+
+def jsonable(value):
+    """Tuples to lists, recursively (generator configs as JSON-safe dicts)."""
+    if isinstance(value, dict):
+        return {k: jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    return value

@@ -49,6 +49,7 @@ from np_sim.benchmarks.common import (
     ClutterSpec,
     DraftRejected,
     box,
+    jsonable,
     choose_start_region,
     draft_grid,
     finish_scene,
@@ -121,16 +122,7 @@ class FactorialConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dict of every field (tuples as lists)."""
-        return _jsonable(dataclasses.asdict(self))
-
-
-def _jsonable(value):
-    """Tuples to lists, recursively."""
-    if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    return value
+        return jsonable(dataclasses.asdict(self))
 
 
 @dataclass(frozen=True)

@@ -43,6 +43,7 @@ from np_sim.benchmarks.common import (
     ClutterSpec,
     DraftRejected,
     box,
+    jsonable,
     finish_scene,
     irregular_boundary,
     place_clutter,
@@ -118,16 +119,7 @@ class TopologyConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dict of every field (tuples as lists)."""
-        return _jsonable(dataclasses.asdict(self))
-
-
-def _jsonable(value):
-    """Tuples to lists, recursively."""
-    if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    return value
+        return jsonable(dataclasses.asdict(self))
 
 
 @dataclass(frozen=True)
