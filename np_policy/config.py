@@ -1,0 +1,164 @@
+"""Configuration of the NeuralParker policy network and its PPO recipe (paper App. A Tables IV and V, SPEC §6).
+
+Defaults are the paper's numbers. The recipe's names (epochs, steps per epoch, steps per collect, repeats, batch)
+are those of Tianshou's on-policy trainer, whose semantics the PPO here reproduces: each epoch collects
+``steps_per_collect`` transitions at a time from ``num_train_envs`` envs until at least ``steps_per_epoch`` are in;
+after each collect, ``repeats`` passes over the collected data in shuffled minibatches of ``batch_size``.
+Variants are ``dataclasses.replace``; ``from_dict`` rejects unknown keys (``np_sim.errors.ConfigError``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from np_sim.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class PPOConfig:
+    """The PPO training recipe of paper Table V (Tianshou on-policy trainer semantics)."""
+
+    learning_rate: float = 3.0e-4
+    """Adam step size at the first update."""
+    lr_linear_decay: bool = True
+    """Decay the learning rate linearly to 0 over ``total_updates`` (one scheduler step per collect)."""
+    gamma: float = 0.99
+    """Discount γ per arc."""
+    gae_lambda: float = 0.95
+    """GAE λ."""
+    clip_coef: float = 0.15
+    """PPO ratio clip ε."""
+    value_clip: bool = False
+    """Clip the value prediction around the collected value by ``clip_coef`` (Tianshou ``value_clip``; off)."""
+    vf_coef: float = 0.25
+    """Weight of the value loss (mean squared error, no ½ factor, as in Tianshou)."""
+    ent_coef: float = 0.005
+    """Weight of the entropy bonus."""
+    max_grad_norm: float = 0.5
+    """Global gradient-norm clip per minibatch step."""
+    norm_advantages: bool = True
+    """Normalise advantages per minibatch to zero mean and unit std."""
+    norm_rewards: bool = True
+    """Tianshou reward normalisation: GAE returns divided by a running std of the returns; the critic learns them."""
+    epochs: int = 240
+    """Training epochs (snapshot and selection granularity)."""
+    steps_per_epoch: int = 60_000
+    """Minimum env steps collected per epoch (collects repeat until reached)."""
+    steps_per_collect: int = 16_384
+    """Env transitions per collect (= per PPO update), summed over the training envs."""
+    repeats: int = 10
+    """Passes over each collected batch."""
+    batch_size: int = 8_192
+    """Minibatch size; a short last minibatch is merged into the previous one (Tianshou ``merge_last``)."""
+    buffer_size: int = 131_072
+    """Replay-buffer capacity of the Tianshou recipe (≥ ``steps_per_collect``; on-policy data is cleared per collect)."""
+    num_train_envs: int = 128
+    """Parallel training environments."""
+    num_test_envs: int = 32
+    """Parallel test environments (checkpoint selection episodes)."""
+    snapshot_every_epochs: int = 20
+    """Save a snapshot every this many epochs."""
+    selection_episodes: int = 32
+    """Sampled full-range training-distribution episodes per epoch for checkpoint selection."""
+    adam_eps: float = 1.0e-8
+    """Adam ε (torch default, as in Tianshou's examples)."""
+    norm_eps: float = 1.0e-8
+    """ε added to the running return variance and to the minibatch advantage std."""
+
+    def __post_init__(self) -> None:
+        for name in ("steps_per_epoch", "steps_per_collect", "repeats", "batch_size", "num_train_envs",
+                     "num_test_envs", "epochs"):
+            if getattr(self, name) <= 0:
+                raise ConfigError(f"PPOConfig.{name}: expected a positive integer, got {getattr(self, name)!r}")
+        if self.steps_per_collect % self.num_train_envs:
+            raise ConfigError(
+                f"PPOConfig.steps_per_collect: expected a multiple of num_train_envs={self.num_train_envs}, "
+                f"got {self.steps_per_collect}")
+
+    @property
+    def steps_per_env_per_collect(self) -> int:
+        """Rollout length T per training env per collect."""
+        return self.steps_per_collect // self.num_train_envs
+
+    @property
+    def collects_per_epoch(self) -> int:
+        """Collects (= PPO updates) per epoch: ceil(steps_per_epoch / steps_per_collect)."""
+        return math.ceil(self.steps_per_epoch / self.steps_per_collect)
+
+    @property
+    def total_updates(self) -> int:
+        """Scheduler length of the linear learning-rate decay (Tianshou examples' ``max_update_num``)."""
+        return self.collects_per_epoch * self.epochs
+
+    def lr_at(self, update: int) -> float:
+        """Learning rate for the 0-based ``update`` (linear decay to 0 over ``total_updates`` when enabled)."""
+        if not self.lr_linear_decay:
+            return self.learning_rate
+        return self.learning_rate * max(0.0, 1.0 - update / self.total_updates)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain dict (JSON-safe)."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "PPOConfig":
+        """Inverse of ``to_dict``; unknown keys are a ConfigError."""
+        return _build(cls, data, "PPOConfig")
+
+
+@dataclass(frozen=True)
+class NetworkConfig:
+    """The scene encoder and actor–critic heads of paper §III-C and App. A Table IV (Panel A)."""
+
+    token_dim: int = 16
+    """Width of each geometry token (obstacle or boundary slot)."""
+    token_heads: int = 1
+    """Attention heads over the geometry tokens."""
+    token_ff_dim: int = 32
+    """Hidden width of the geometry block's feed-forward layer."""
+    stream_hidden: int = 64
+    """Hidden width of each stream MLP (ego, LiDAR, obstacle slot, boundary slot)."""
+    fusion_dim: int = 128
+    """Width of the global–local fusion tokens and of the encoder feature."""
+    fusion_depth: int = 1
+    """Transformer layers in the global–local fusion."""
+    fusion_heads: int = 4
+    """Attention heads in the fusion (4 × 32 = 128)."""
+    fusion_ff_dim: int = 256
+    """Hidden width of the fusion layer's feed-forward block."""
+    head_hidden: tuple[int, ...] = (64, 128, 256, 64)
+    """Hidden widths of the separate actor and critic MLPs."""
+    init_log_std: float = -0.5
+    """Initial value of the state-independent log-std of the Gaussian (Tianshou MuJoCo PPO example)."""
+    action_dim: int = 2
+    """Normalised action (a_κ, a_l) ∈ [−1, 1]²."""
+
+    def __post_init__(self) -> None:
+        if self.fusion_dim % self.fusion_heads:
+            raise ConfigError(f"NetworkConfig.fusion_dim: expected a multiple of fusion_heads={self.fusion_heads}, "
+                              f"got {self.fusion_dim}")
+        if self.token_dim % self.token_heads:
+            raise ConfigError(f"NetworkConfig.token_dim: expected a multiple of token_heads={self.token_heads}, "
+                              f"got {self.token_dim}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain dict (JSON-safe)."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "NetworkConfig":
+        """Inverse of ``to_dict``; unknown keys are a ConfigError."""
+        return _build(cls, data, "NetworkConfig")
+
+
+def _build(cls, data, path: str):
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: expected a mapping, got {type(data).__name__}")
+    names = {f.name for f in dataclasses.fields(cls)}
+    unknown = sorted(set(data) - names)
+    if unknown:
+        raise ConfigError(f"{path}: unknown key(s) {unknown}; expected some of {sorted(names)}")
+    return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in data.items()})

@@ -1,0 +1,192 @@
+"""The NeuralParker scene encoder and actor–critic (paper §III-C, Fig. architecture, App. A Table IV).
+
+Streams follow ``ObservationConfig`` and are sliced from the flat observation with ``observation_sections``:
+
+| stream     | input                  | embedding                                                              |
+|------------|------------------------|------------------------------------------------------------------------|
+| ego        | 4                      | MLP 4 → 64 → 128 (one fusion token)                                    |
+| lidar      | n_beams (120)          | MLP 120 → 64 → 128 (one fusion token), when ``use_lidar``              |
+| obstacles  | 20 slots × 16          | per-slot MLP 16 → 64 → 16 (geometry tokens), when ``use_obstacles``    |
+| boundary   | 10 slots × 4           | per-slot MLP 4 → 64 → 16 (geometry tokens), when ``use_boundary``      |
+
+Geometry tokens get a learned positional embedding per slot (30 slots) and pass one self-attention block
+(``Attn(Z) = softmax((Z W_Q)(Z W_K)^T / √d) Z W_V``, d = 16, one head) followed by a feed-forward block, each
+with a residual connection and LayerNorm (post-norm). There is **no padding mask**: unused slots carry the −1e4
+sentinel through the stream MLP and attention as they are (paper App. A). The tokens are mean-pooled and
+projected to one 128-D fusion token (the global geometry summary).
+
+Global–local fusion: the geometry, ego and LiDAR tokens (128-D each) pass ``fusion_depth`` (1) transformer layers
+with 4 heads of 32; the output tokens are flattened (so each stream keeps its identity) and projected to the
+128-D feature.
+
+Actor and critic: the paper's caption says "the shared representation is passed to the actor and critic
+networks" and Table IV says "separate [64, 128, 256, 64] networks", so the **encoder is shared** and the two MLP
+heads are separate. The actor outputs the mean of a diagonal Gaussian over the normalised 2-D action with a
+state-independent learned log-std; samples are clipped to [−1, 1] before the env (``clip_action``), log-probs are
+those of the unclipped sample (Tianshou ``action_bound_method="clip"``).
+
+Attention uses ``torch.nn.functional.scaled_dot_product_attention`` on a fused QKV projection: on this CPU it
+was faster than ``nn.MultiheadAttention`` at batch 8,192 (see ``np_policy/bench_update.py`` and the report).
+Initialisation follows Tianshou's MuJoCo PPO example: orthogonal weights (gain √2), zero biases, the actor's last
+layer scaled by 0.01.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+from np_sim.config import ObservationConfig
+from np_sim.observation import observation_sections, observation_size
+from np_policy.config import NetworkConfig
+
+
+def _mlp(sizes: list[int], activate_last: bool = False) -> nn.Sequential:
+    layers: list[nn.Module] = []
+    for i, (a, b) in enumerate(zip(sizes[:-1], sizes[1:])):
+        layers.append(nn.Linear(a, b))
+        if i < len(sizes) - 2 or activate_last:
+            layers.append(nn.ReLU())
+    return nn.Sequential(*layers)
+
+
+class SelfAttentionBlock(nn.Module):
+    """Post-norm transformer layer: x ← LN(x + MHA(x)); x ← LN(x + FF(x)). No mask, no dropout."""
+
+    def __init__(self, dim: int, heads: int, ff_dim: int):
+        super().__init__()
+        self.heads = heads
+        self.qkv = nn.Linear(dim, 3 * dim)
+        self.out = nn.Linear(dim, dim)
+        self.norm1 = nn.LayerNorm(dim)
+        self.ff = nn.Sequential(nn.Linear(dim, ff_dim), nn.ReLU(), nn.Linear(ff_dim, dim))
+        self.norm2 = nn.LayerNorm(dim)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        """x: (B, S, dim) -> (B, S, dim)."""
+        b, s, d = x.shape
+        q, k, v = self.qkv(x).view(b, s, 3, self.heads, d // self.heads).permute(2, 0, 3, 1, 4)
+        attn = F.scaled_dot_product_attention(q, k, v)  # (B, H, S, d_h)
+        x = self.norm1(x + self.out(attn.transpose(1, 2).reshape(b, s, d)))
+        return self.norm2(x + self.ff(x))
+
+
+class SceneEncoder(nn.Module):
+    """Flat observation (B, obs_size) -> 128-D feature (B, fusion_dim); streams as in ``ObservationConfig``."""
+
+    def __init__(self, obs_config: ObservationConfig, net_config: NetworkConfig | None = None):
+        super().__init__()
+        net = NetworkConfig() if net_config is None else net_config
+        self.obs_config, self.net_config = obs_config, net
+        self.sections = observation_sections(obs_config)
+        self.obs_size = observation_size(obs_config)
+        h, d, t = net.stream_hidden, net.fusion_dim, net.token_dim
+
+        self.ego = _mlp([self.sections["ego"][1] - self.sections["ego"][0], h, d])
+        self.lidar = _mlp([obs_config.n_beams, h, d]) if "lidar" in self.sections else None
+        self.obstacle = _mlp([2 * obs_config.vertices_per_obstacle, h, t]) if "obstacles" in self.sections else None
+        self.boundary = _mlp([4, h, t]) if "boundary" in self.sections else None
+        n_slots = (obs_config.max_obstacles if self.obstacle is not None else 0) + (
+            obs_config.max_boundary_segments if self.boundary is not None else 0)
+        self.n_slots = n_slots
+        if n_slots:
+            self.slot_position = nn.Parameter(torch.randn(n_slots, t) * 0.02)
+            self.geometry_attention = SelfAttentionBlock(t, net.token_heads, net.token_ff_dim)
+            self.geometry_summary = nn.Linear(t, d)
+        self.n_tokens = 1 + (self.lidar is not None) + (n_slots > 0)
+        self.fusion = nn.Sequential(*[SelfAttentionBlock(d, net.fusion_heads, net.fusion_ff_dim)
+                                      for _ in range(net.fusion_depth)])
+        self.project = nn.Linear(self.n_tokens * d, d)
+        self.feature_dim = d
+
+    def _slice(self, obs: torch.Tensor, name: str) -> torch.Tensor:
+        a, b = self.sections[name]
+        return obs[:, a:b]
+
+    def geometry_tokens(self, obs: torch.Tensor) -> torch.Tensor:
+        """(B, n_slots, token_dim) embedded slot tokens plus positional embeddings (before attention)."""
+        parts = []
+        if self.obstacle is not None:
+            slots = self._slice(obs, "obstacles").reshape(obs.shape[0], self.obs_config.max_obstacles, -1)
+            parts.append(self.obstacle(slots))
+        if self.boundary is not None:
+            slots = self._slice(obs, "boundary").reshape(obs.shape[0], self.obs_config.max_boundary_segments, 4)
+            parts.append(self.boundary(slots))
+        return torch.cat(parts, dim=1) + self.slot_position
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        """obs: (B, obs_size) float32 -> (B, fusion_dim)."""
+        if obs.shape[-1] != self.obs_size:
+            raise ValueError(f"SceneEncoder: expected observations of size {self.obs_size} for "
+                             f"sections {self.sections}, got shape {tuple(obs.shape)}")
+        tokens = [self.ego(self._slice(obs, "ego"))]
+        if self.lidar is not None:
+            tokens.append(self.lidar(self._slice(obs, "lidar")))
+        if self.n_slots:
+            geometry = self.geometry_attention(self.geometry_tokens(obs))
+            tokens.append(self.geometry_summary(geometry.mean(dim=1)))
+        fused = self.fusion(torch.stack(tokens, dim=1))
+        return F.relu(self.project(fused.flatten(1)))
+
+
+class ActorCritic(nn.Module):
+    """Shared ``SceneEncoder``; separate actor and critic MLPs; diagonal Gaussian with a learned log-std."""
+
+    def __init__(self, obs_config: ObservationConfig, net_config: NetworkConfig | None = None):
+        super().__init__()
+        net = NetworkConfig() if net_config is None else net_config
+        self.net_config = net
+        self.encoder = SceneEncoder(obs_config, net)
+        d = self.encoder.feature_dim
+        self.actor = _mlp([d, *net.head_hidden, net.action_dim])
+        self.critic = _mlp([d, *net.head_hidden, 1])
+        self.log_std = nn.Parameter(torch.full((net.action_dim,), float(net.init_log_std)))
+        self._init_weights()
+
+    def _init_weights(self) -> None:
+        for m in self.modules():
+            if isinstance(m, nn.Linear):
+                nn.init.orthogonal_(m.weight, gain=math.sqrt(2))
+                nn.init.zeros_(m.bias)
+        with torch.no_grad():
+            self.actor[-1].weight.mul_(0.01)
+
+    def distribution(self, obs: torch.Tensor) -> tuple[torch.distributions.Normal, torch.Tensor]:
+        """(per-dimension Normal over the normalised action, value (B,))."""
+        feature = self.encoder(obs)
+        mean = self.actor(feature)
+        std = self.log_std.exp().expand_as(mean)
+        return torch.distributions.Normal(mean, std), self.critic(feature).squeeze(-1)
+
+    @torch.no_grad()
+    def act(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """Sample: (unclipped action (B, 2), log-prob (B,), value (B,)). Clip with ``clip_action`` before the env."""
+        dist, value = self.distribution(obs)
+        action = dist.sample()
+        return action, dist.log_prob(action).sum(-1), value
+
+    def evaluate(self, obs: torch.Tensor, action: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """(log-prob (B,), entropy (B,), value (B,)) of stored unclipped actions; differentiable."""
+        dist, value = self.distribution(obs)
+        return dist.log_prob(action).sum(-1), dist.entropy().sum(-1), value
+
+    @torch.no_grad()
+    def value(self, obs: torch.Tensor) -> torch.Tensor:
+        """Critic value (B,)."""
+        return self.critic(self.encoder(obs)).squeeze(-1)
+
+    @torch.no_grad()
+    def mean_action(self, obs: torch.Tensor) -> torch.Tensor:
+        """Deterministic action: the Gaussian mean clipped to [−1, 1] (B, 2)."""
+        return self.actor(self.encoder(obs)).clamp(-1.0, 1.0)
+
+
+def clip_action(action: np.ndarray | torch.Tensor):
+    """Map a sampled normalised action to the env's Box(−1, 1) (Tianshou ``action_bound_method='clip'``)."""
+    if isinstance(action, torch.Tensor):
+        return action.clamp(-1.0, 1.0)
+    return np.clip(action, -1.0, 1.0)
