@@ -1,0 +1,336 @@
+"""Train the NeuralParker arc policy with PPO (paper §III-E, Algorithm 1, App. A Table V).
+
+``python -m np_policy.train --benchmark factorial --seed 0 [--config FILE] [--epochs N] [--out DIR] [--resume]``
+
+One run reads top to bottom: build the batched env on the training scenes with the geodesic start curriculum
+and the in-loop Hermite ensemble, then per epoch collect 16,384 transitions at a time from the 128 training envs
+until at least 60,000 steps are in, after each collect run 10 shuffled passes of minibatches of 8,192
+(Tianshou's on-policy trainer semantics, SPEC §6), then score 32 full-range training-distribution episodes
+with the deterministic policy for checkpoint selection (never a frozen evaluation episode). Every epoch appends
+a line to ``metrics.jsonl`` and redraws ``curves.png``; ``best.pt`` holds the selected policy; ``snapshot.pt``
+(every 20 epochs and at the end) holds everything needed to resume exactly — on CPU a resumed run gives the
+same curve as an uninterrupted one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from tqdm import tqdm
+
+from np_policy.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
+from np_policy.config import NetworkConfig, PPOConfig
+from np_policy.network import ActorCritic, clip_action
+from np_policy.ppo import RunningMeanStd, compute_targets, make_optimizer, ppo_update, set_learning_rate
+from np_sim.config import EnvConfig
+from np_sim.curriculum import CurriculumSchedule, CurriculumStartSampler
+from np_sim.env import ParkingVectorEnv
+from np_sim.errors import ConfigError
+from np_sim.starts import UniformStartSampler
+
+BENCHMARKS = ("factorial", "topology", "examples")
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Everything a run depends on; written beside its checkpoints and stored inside them."""
+
+    benchmark: str = "factorial"
+    """Training scenes: 'factorial', 'topology' (their train splits) or 'examples' (the hand-made scenes)."""
+    seed: int = 0
+    """Seed of torch, the envs' starts and the minibatch shuffling."""
+    torch_threads: int = 0
+    """torch intra-op threads (0 = all cores)."""
+    curriculum_pool: int = 256
+    """Start poses per scene in the geodesic curriculum pool."""
+    env: EnvConfig = field(default_factory=EnvConfig)
+    ppo: PPOConfig = field(default_factory=PPOConfig)
+    network: NetworkConfig = field(default_factory=NetworkConfig)
+    curriculum: CurriculumSchedule = field(default_factory=CurriculumSchedule)
+
+    def __post_init__(self) -> None:
+        if self.benchmark not in BENCHMARKS:
+            raise ConfigError(f"TrainConfig.benchmark: expected one of {list(BENCHMARKS)}, got {self.benchmark!r}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain nested dict (JSON-safe)."""
+        return {"benchmark": self.benchmark, "seed": self.seed, "torch_threads": self.torch_threads,
+                "curriculum_pool": self.curriculum_pool, "env": self.env.to_dict(), "ppo": self.ppo.to_dict(),
+                "network": self.network.to_dict(), "curriculum": self.curriculum.to_dict()}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "TrainConfig":
+        """Inverse of ``to_dict``; an unknown key anywhere is a ConfigError naming it."""
+        if not isinstance(data, dict):
+            raise ConfigError(f"TrainConfig: expected a mapping, got {type(data).__name__}")
+        known = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ConfigError(f"TrainConfig: unknown key(s) {unknown}; expected some of {sorted(known)}")
+        parsers = {"env": EnvConfig.from_dict, "ppo": PPOConfig.from_dict, "network": NetworkConfig.from_dict,
+                   "curriculum": CurriculumSchedule.from_dict}
+        return cls(**{k: parsers[k](v) if k in parsers else v for k, v in data.items()})
+
+
+def training_scenes(benchmark: str):
+    """The training split of ``benchmark`` (or the hand-made example scenes)."""
+    if benchmark == "examples":
+        from np_sim.examples import example_scenes
+
+        return [s for s in example_scenes() if s.tags.get("expect") != "no_path"]
+    from np_sim.benchmarks import load_benchmark
+
+    return load_benchmark(benchmark, "train")
+
+
+class Trainer:
+    """State of one training run: model, optimiser, envs, statistics, counters."""
+
+    def __init__(self, config: TrainConfig, out: Path):
+        self.config = config
+        self.out = Path(out)
+        ppo = config.ppo
+        if config.torch_threads:
+            torch.set_num_threads(config.torch_threads)
+        torch.manual_seed(config.seed)
+        self.scenes = training_scenes(config.benchmark)
+        self.sampler = CurriculumStartSampler(self.scenes, fraction=config.curriculum.start_fraction,
+                                              pool_size=config.curriculum_pool, seed=config.seed)
+        self.envs = ParkingVectorEnv(self.scenes, ppo.num_train_envs, config.env, seed=config.seed,
+                                     start_sampler=self.sampler)
+        self.select_envs = ParkingVectorEnv(self.scenes, ppo.num_test_envs, config.env, seed=config.seed + 1,
+                                            start_sampler=UniformStartSampler(self.scenes, config.env.vehicle))
+        self.model = ActorCritic(config.env.observation, config.network)
+        self.optimizer = make_optimizer(self.model, ppo)
+        self.return_rms = RunningMeanStd()
+        self.shuffle = torch.Generator().manual_seed(config.seed)
+        self.epoch = 0
+        self.updates = 0
+        self.env_steps = 0
+        self.best_reward = -np.inf
+        self.sampler.set_progress(0.0, config.curriculum)
+        self.obs, _ = self.envs.reset()
+        self.episode_return = np.zeros(ppo.num_train_envs)
+
+    # ------------------------------------------------------------------------------------------------ collect
+    def collect(self) -> dict[str, Any]:
+        """One collect of ``steps_per_collect`` transitions; returns the rollout arrays and episode stats."""
+        ppo = self.config.ppo
+        T, N = ppo.steps_per_env_per_collect, ppo.num_train_envs
+        D = self.obs.shape[1]
+        obs = np.empty((T, N, D), np.float32)
+        actions = np.empty((T, N, 2), np.float32)
+        log_probs = np.empty((T, N), np.float32)
+        values = np.empty((T + 1, N), np.float32)
+        rewards = np.empty((T, N), np.float32)
+        terminated = np.empty((T, N), bool)
+        truncated = np.empty((T, N), bool)
+        final_values = np.zeros((T, N), np.float32)
+        ended_returns, ended_success = [], []
+        self.model.eval()
+        with torch.no_grad():
+            for t in range(T):
+                obs[t] = self.obs
+                a, lp, v = self.model.act(torch.from_numpy(self.obs))
+                actions[t], log_probs[t], values[t] = a.numpy(), lp.numpy(), v.numpy()
+                self.obs, r, term, trunc, info = self.envs.step(clip_action(actions[t]))
+                rewards[t], terminated[t], truncated[t] = r, term, trunc
+                self.episode_return += r
+                done = term | trunc
+                if done.any():
+                    final = torch.from_numpy(info["final_obs"][done])
+                    final_values[t, done] = self.model.value(final).numpy()
+                    ended_returns.extend(self.episode_return[done].tolist())
+                    ended_success.extend(info["success"][done].tolist())
+                    self.episode_return[done] = 0.0
+            values[T] = self.model.value(torch.from_numpy(self.obs)).numpy()
+        done = terminated | truncated
+        next_values = np.where(done, final_values, values[1:])
+        self.env_steps += T * N
+        return {"obs": obs, "actions": actions, "log_probs": log_probs, "values": values[:T], "rewards": rewards,
+                "terminated": terminated, "truncated": truncated, "next_values": next_values,
+                "ended_returns": ended_returns, "ended_success": ended_success}
+
+    def update(self, roll: dict[str, Any]) -> dict[str, float]:
+        """PPO update on one collect (Tianshou semantics: GAE, reward normalisation, 10 passes)."""
+        ppo = self.config.ppo
+        set_learning_rate(self.optimizer, ppo.lr_at(self.updates))
+        advantages, returns = compute_targets(roll["rewards"], roll["values"], roll["next_values"],
+                                              roll["terminated"], roll["truncated"], ppo, self.return_rms)
+        flat = lambda a: torch.from_numpy(np.ascontiguousarray(a.reshape(-1, *a.shape[2:])))  # noqa: E731
+        batch = {"obs": flat(roll["obs"]), "actions": flat(roll["actions"]), "log_probs": flat(roll["log_probs"]),
+                 "advantages": flat(advantages.astype(np.float32)), "returns": flat(returns.astype(np.float32)),
+                 "values": flat(roll["values"])}
+        stats = ppo_update(self.model, self.optimizer, batch, ppo, self.shuffle)
+        self.updates += 1
+        return stats
+
+    # ------------------------------------------------------------------------------------------------ selection
+    def selection_reward(self) -> tuple[float, float]:
+        """Mean return and success of ``selection_episodes`` full-range training-distribution episodes played
+        with the deterministic (mean) action — the checkpoint-selection score (App. A)."""
+        env = self.select_envs
+        n = env.num_envs
+        obs, _ = env.reset()
+        returns = np.zeros(n)
+        success = np.zeros(n, bool)
+        active = np.ones(n, bool)
+        self.model.eval()
+        with torch.no_grad():
+            while active.any():
+                action = clip_action(self.model.mean_action(torch.from_numpy(obs))).numpy()
+                obs, r, term, trunc, info = env.step(action)
+                returns[active] += r[active]
+                ended = active & (term | trunc)
+                success[ended] = info["success"][ended]
+                active &= ~(term | trunc)
+        return float(returns.mean()), float(success.mean())
+
+    # ------------------------------------------------------------------------------------------------ state
+    def state(self) -> dict[str, Any]:
+        """Everything needed to resume exactly."""
+        return {
+            "model": self.model.state_dict(), "optimizer": self.optimizer.state_dict(),
+            "config": self.config.to_dict(), "return_rms": self.return_rms.state_dict(),
+            "epoch": self.epoch, "updates": self.updates, "env_steps": self.env_steps,
+            "best_reward": self.best_reward, "torch_rng": torch.get_rng_state(),
+            "shuffle_rng": self.shuffle.get_state(), "obs": self.obs.copy(),
+            "episode_return": self.episode_return.copy(),
+            "envs": {"S": self.envs.core.S.copy(), "rng": self.envs._rng.bit_generator.state},
+            "select_rng": self.select_envs._rng.bit_generator.state,
+            "curriculum_fraction": self.sampler.fraction,
+        }
+
+    def restore(self, payload: dict[str, Any]) -> None:
+        """Inverse of ``state``."""
+        self.model.load_state_dict(payload["model"])
+        self.optimizer.load_state_dict(payload["optimizer"])
+        self.return_rms.load_state_dict(payload["return_rms"])
+        self.epoch, self.updates, self.env_steps = payload["epoch"], payload["updates"], payload["env_steps"]
+        self.best_reward = payload["best_reward"]
+        torch.set_rng_state(payload["torch_rng"])
+        self.shuffle.set_state(payload["shuffle_rng"])
+        self.obs = payload["obs"].copy()
+        self.episode_return = payload["episode_return"].copy()
+        self.envs.core.S[:] = payload["envs"]["S"]
+        self.envs.core.obs[:] = self.obs
+        self.envs._rng.bit_generator.state = payload["envs"]["rng"]
+        self.select_envs._rng.bit_generator.state = payload["select_rng"]
+        self.sampler.set_fraction(payload["curriculum_fraction"])
+
+    def checkpoint_payload(self, selection: float) -> dict[str, Any]:
+        """What ``best.pt`` holds: weights, the full config, normalisation statistics, provenance."""
+        return {"model": self.model.state_dict(), "config": self.config.to_dict(),
+                "return_rms": self.return_rms.state_dict(), "epoch": self.epoch, "selection_reward": selection,
+                "env_steps": self.env_steps}
+
+
+def _plot_curves(rows: list[dict[str, Any]], path: Path) -> None:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(10, 3.2))
+    epochs = [r["epoch"] for r in rows]
+    for i, (key, label) in enumerate([("train_return", "mean episode return (train)"),
+                                      ("train_success", "success rate (train)"),
+                                      ("selection_reward", "selection reward (32 full-range episodes)")]):
+        ax = fig.add_subplot(1, 3, i + 1)
+        ax.plot(epochs, [r[key] for r in rows], marker=".")
+        ax.set_xlabel("epoch")
+        ax.set_title(label, fontsize="small")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+
+
+def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resume: bool = False,
+          progress: bool = True) -> list[dict[str, Any]]:
+    """Run (or resume) training up to ``epochs`` (default: the config's); returns the metrics rows."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    trainer = Trainer(config, out)
+    metrics_path = out / "metrics.jsonl"
+    rows: list[dict[str, Any]] = []
+    if resume:
+        snapshot = out / "snapshot.pt"
+        payload = load_checkpoint(snapshot, expected_config=config.to_dict())
+        trainer.restore(payload)
+        if metrics_path.exists():
+            rows = [json.loads(line) for line in metrics_path.read_text().splitlines() if line.strip()]
+            rows = [r for r in rows if r["epoch"] <= trainer.epoch]
+    (out / "config.json").write_text(json.dumps(config.to_dict(), indent=2))
+    metrics_path.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    ppo = config.ppo
+    last = ppo.epochs if epochs is None else int(epochs)
+    bar = tqdm(range(trainer.epoch, last), desc="epochs", unit="epoch", disable=not progress,
+               initial=trainer.epoch, total=last)
+    for _ in bar:
+        trainer.sampler.set_progress(trainer.epoch / ppo.epochs, config.curriculum)
+        t0 = time.perf_counter()
+        steps0 = trainer.env_steps
+        returns, successes, stats = [], [], {}
+        while trainer.env_steps - steps0 < ppo.steps_per_epoch:
+            roll = trainer.collect()
+            returns += roll["ended_returns"]
+            successes += roll["ended_success"]
+            stats = trainer.update(roll)
+        trainer.epoch += 1
+        selection, selection_success = trainer.selection_reward()
+        elapsed = time.perf_counter() - t0
+        row = {"epoch": trainer.epoch, "env_steps": trainer.env_steps,
+               "steps_per_s": (trainer.env_steps - steps0) / elapsed,
+               "train_return": float(np.mean(returns)) if returns else float("nan"),
+               "train_success": float(np.mean(successes)) if successes else float("nan"),
+               "episodes": len(returns), "curriculum_fraction": trainer.sampler.fraction,
+               "selection_reward": selection, "selection_success": selection_success, **stats}
+        rows.append(row)
+        with metrics_path.open("a") as fh:
+            fh.write(json.dumps(row) + "\n")
+        if selection > trainer.best_reward:
+            trainer.best_reward = selection
+            save_checkpoint(out / "best.pt", trainer.checkpoint_payload(selection))
+        if trainer.epoch % ppo.snapshot_every_epochs == 0 or trainer.epoch == last:
+            save_checkpoint(out / "snapshot.pt", trainer.state())
+        _plot_curves(rows, out / "curves.png")
+        bar.set_postfix(steps_s=f"{row['steps_per_s']:,.0f}", ret=f"{row['train_return']:.0f}",
+                        succ=f"{row['train_success']:.2f}", cur=f"{row['curriculum_fraction']:.2f}")
+    return rows
+
+
+def main(argv=None) -> list[dict[str, Any]]:
+    parser = argparse.ArgumentParser(prog="python -m np_policy.train", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--benchmark", choices=BENCHMARKS, default="factorial", help="training scenes")
+    parser.add_argument("--seed", type=int, default=0, help="training seed")
+    parser.add_argument("--config", type=Path, help="JSON file with TrainConfig fields overriding the defaults "
+                        "(nested: env, ppo, network, curriculum); unknown keys are errors")
+    parser.add_argument("--epochs", type=int, help="stop after this epoch (default: ppo.epochs); the LR schedule "
+                        "and curriculum still follow ppo.epochs")
+    parser.add_argument("--out", type=Path, help="run folder (default: results/train/<benchmark>_seed<N>)")
+    parser.add_argument("--resume", action="store_true", help="continue from <out>/snapshot.pt")
+    args = parser.parse_args(argv)
+    data: dict[str, Any] = {}
+    if args.config is not None:
+        try:
+            data = json.loads(args.config.read_text())
+        except (OSError, json.JSONDecodeError) as exc:
+            raise SystemExit(f"error: {args.config}: {exc}")
+    data.update(benchmark=args.benchmark, seed=args.seed)
+    config = TrainConfig.from_dict(data)
+    out = args.out or Path("results/train") / f"{config.benchmark}_seed{config.seed}"
+    try:
+        rows = train(config, out, epochs=args.epochs, resume=args.resume)
+    except CheckpointError as exc:
+        raise SystemExit(f"error: {exc}")
+    print(f"{len(rows)} epochs in {out}: metrics.jsonl, curves.png, best.pt, snapshot.pt")
+    return rows
+
+
+if __name__ == "__main__":
+    main()
