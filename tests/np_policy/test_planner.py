@@ -1,0 +1,51 @@
+"""NeuralParkerPlanner: rebuilt from a checkpoint, plays the env's rules, returns a consistent Plan."""
+
+import numpy as np
+import pytest
+
+from np_policy.checkpoint import CheckpointError
+from np_policy.planner import NeuralParkerPlanner
+from np_policy.train import TrainConfig, train
+from np_sim.env import ParkingEnv
+from np_sim.examples import example_scenes
+from np_sim.starts import UniformStartSampler
+
+TINY = {"benchmark": "examples", "seed": 1, "curriculum_pool": 32,
+        "ppo": {"num_train_envs": 16, "num_test_envs": 4, "steps_per_collect": 256, "steps_per_epoch": 256,
+                "batch_size": 128, "repeats": 1, "epochs": 1}}
+
+
+@pytest.fixture(scope="module")
+def planner(tmp_path_factory):
+    out = tmp_path_factory.mktemp("run")
+    train(TrainConfig.from_dict(TINY), out, progress=False)
+    return NeuralParkerPlanner.from_checkpoint(out / "best.pt")
+
+
+def test_plans_replay_exactly_in_the_env(planner):
+    scenes = [s for s in example_scenes() if s.tags.get("expect") != "no_path"]
+    sampler = UniformStartSampler(scenes)
+    rng = np.random.default_rng(0)
+    outcomes = set()
+    for k in range(len(scenes)):
+        for start in sampler(rng, np.full(4, k)):
+            plan = planner.plan(scenes[k], start)
+            assert plan.arcs.shape[1] == 2 and len(plan.arcs) >= 1 and plan.plan_time_s > 0
+            env = ParkingEnv(scenes[k], planner.config.env)
+            env.reset(options={"start": start})
+            for kappa, length in plan.arcs:
+                _, _, term, trunc, info = env.step(np.array([kappa / 0.68, length / 10.0], np.float32))
+            assert term or trunc
+            assert info["success"] == plan.success
+            assert plan.reason == ("" if plan.success else ("collision" if info["collision"] else "timeout"))
+            if plan.success:
+                L, rev, dk = plan.metrics()
+                assert L == pytest.approx(info["path_length"]) and rev == info["reversals"]
+                assert dk == pytest.approx(info["delta_kappa"])
+            outcomes.add(plan.success)
+    assert outcomes == {True, False}
+
+
+def test_missing_checkpoint_is_a_clear_error(tmp_path):
+    with pytest.raises(CheckpointError, match="checkpoint file not found"):
+        NeuralParkerPlanner.from_checkpoint(tmp_path / "missing.pt")
