@@ -8,6 +8,7 @@ checks, the heading gate and the Hermite selection follow exactly the env's rule
 from __future__ import annotations
 
 import time
+import weakref
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +30,15 @@ class NeuralParkerPlanner:
     def __init__(self, model: ActorCritic, config: TrainConfig):
         self.model = model.eval()
         self.config = config
+        self._envs: weakref.WeakKeyDictionary[Scene, ParkingEnv] = weakref.WeakKeyDictionary()
+
+    def _env(self, scene: Scene) -> ParkingEnv:
+        """One env per scene, rebuilt when the env config changes (packing a scene costs about a millisecond)."""
+        env = self._envs.get(scene)
+        if env is None or env.config != self.config.env:
+            env = ParkingEnv(scene, self.config.env)
+            self._envs[scene] = env
+        return env
 
     @classmethod
     def from_checkpoint(cls, path: str | Path) -> "NeuralParkerPlanner":
@@ -42,7 +52,7 @@ class NeuralParkerPlanner:
     def plan(self, scene: Scene, start) -> Plan:
         """Roll out the mean action from ``start`` until success, collision or the arc budget (paper §III-A)."""
         t0 = time.perf_counter()
-        env = ParkingEnv(scene, self.config.env)
+        env = self._env(scene)
         obs, _ = env.reset(options={"start": np.asarray(start, float)})
         kappa_max, l_max = self.config.env.vehicle.kappa_max, self.config.env.episode.max_length_m
         arcs = []

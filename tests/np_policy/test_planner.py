@@ -49,3 +49,21 @@ def test_plans_replay_exactly_in_the_env(planner):
 def test_missing_checkpoint_is_a_clear_error(tmp_path):
     with pytest.raises(CheckpointError, match="checkpoint file not found"):
         NeuralParkerPlanner.from_checkpoint(tmp_path / "missing.pt")
+
+
+def test_evaluate_cli_writes_records_and_table(planner, tmp_path):
+    import csv
+
+    from experiments.evaluate import main
+
+    ckpt = tmp_path / "ckpt.pt"
+    from np_policy.checkpoint import save_checkpoint
+
+    save_checkpoint(ckpt, {"model": planner.model.state_dict(), "config": planner.config.to_dict()})
+    result = main(["--benchmark", "factorial", "--checkpoints", str(ckpt), str(ckpt), "--connector", "fixed",
+                   "--out", str(tmp_path / "eval"), "--limit", "12"])
+    rows = list(csv.DictReader((tmp_path / "eval" / "records.csv").open()))
+    assert len(rows) == 24 and {r["connector"] for r in rows} == {"fixed"}
+    assert "| NeuralParker (fixed) |" in result["table"]
+    # two identical seeds: the sample SD over seeds is zero
+    assert "± 0.000" in result["table"].splitlines()[-1]

@@ -1,0 +1,1 @@
+"""One module per paper table or figure; each prints a table and writes CSV/JSON + plots (SPEC §9)."""

@@ -1,0 +1,48 @@
+"""Shared pieces of the experiment CLIs: run folders, records, paper-style aggregation (SPEC §9)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def run_folder(experiment: str, out: Path | None) -> Path:
+    """``out`` or ``results/<experiment>/<timestamp>/``, created."""
+    folder = Path(out) if out is not None else Path("results") / experiment / time.strftime("%Y%m%d-%H%M%S")
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
+
+
+def git_commit() -> str:
+    """The current git commit, or 'unknown' outside a checkout."""
+    try:
+        return subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def write_records(folder: Path, records: list[dict[str, Any]]) -> None:
+    """``records.csv`` and ``records.json`` (one row per episode)."""
+    if not records:
+        raise ValueError("write_records: no records to write")
+    with (folder / "records.csv").open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(records[0]))
+        writer.writeheader()
+        writer.writerows(records)
+    (folder / "records.json").write_text(json.dumps(records, indent=1))
+
+
+def mean_sd(values: list[float]) -> str:
+    """'m ± s' with the sample SD over seeds ('m' alone for one seed)."""
+    v = np.asarray(values, float)
+    if len(v) == 0 or np.all(np.isnan(v)):
+        return "–"
+    if len(v) == 1:
+        return f"{v[0]:.3f}"
+    return f"{np.nanmean(v):.3f} ± {np.nanstd(v, ddof=1):.3f}"

@@ -1,0 +1,93 @@
+"""Evaluate NeuralParker checkpoints on a benchmark's frozen test starts (paper §III-A protocol, Table I style).
+
+``python -m experiments.evaluate --benchmark factorial --checkpoints a.pt [b.pt c.pt] [--connector fixed|ensemble]
+[--out DIR]``
+
+Each checkpoint is one training seed. Every frozen start (1,080 Factorial, 720 Topology-Stress) is planned with
+the deterministic policy and the checkpoint's environment rules (``--connector`` swaps the terminal connector at
+evaluation time only: the paper's "ensemble, evaluation only" row). Success is on the full set; path length L,
+reversals and Δκ (eq:metrics) on the common-success cohort — here the episodes every evaluated seed solved —
+reported as the mean ± sample SD over seeds; plan time as median and 90th percentile. Writes ``records.csv``
+and ``records.json`` (one row per episode), ``table.md`` and ``config.json`` into the run folder.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from experiments.common import git_commit, mean_sd, run_folder, write_records
+from np_policy.planner import NeuralParkerPlanner
+from np_sim.benchmarks import frozen_starts, load_benchmark
+
+
+def evaluate(benchmark: str, checkpoints: list[Path], connector: str | None = None, out: Path | None = None,
+             limit: int | None = None, progress: bool = True) -> dict[str, Any]:
+    """Plan every frozen start with every checkpoint; returns the records and the table text."""
+    scenes = load_benchmark(benchmark, "test")
+    starts = frozen_starts(benchmark)
+    folder = run_folder("evaluate", out)
+    episodes = [(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])][:limit]
+    records: list[dict[str, Any]] = []
+    for seed_index, path in enumerate(checkpoints):
+        planner = NeuralParkerPlanner.from_checkpoint(path)
+        if connector is not None:
+            env = planner.config.env
+            env = dataclasses.replace(env, connector=dataclasses.replace(env.connector, mode=connector))
+            planner.config = dataclasses.replace(planner.config, env=env)
+        for k, j in tqdm(episodes, desc=f"{Path(path).name}", unit="ep", disable=not progress):
+            plan = planner.plan(scenes[k], starts[k, j])
+            L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))
+            records.append({"scene": scenes[k].name, "start_id": j, "method": "NeuralParker",
+                            "connector": planner.config.env.connector.mode, "checkpoint": str(path),
+                            "seed": planner.config.seed, "seed_index": seed_index, "success": int(plan.success),
+                            "reason": plan.reason, "L": L, "reversals": rev, "delta_kappa": dk,
+                            "plan_time_ms": 1e3 * plan.plan_time_s})
+    table = format_table(records, len(checkpoints))
+    write_records(folder, records)
+    (folder / "table.md").write_text(table + "\n")
+    (folder / "config.json").write_text(json.dumps({"benchmark": benchmark, "checkpoints": [str(p) for p in checkpoints],
+                                                    "connector": connector, "episodes": len(episodes),
+                                                    "git_commit": git_commit()}, indent=2))
+    return {"records": records, "table": table, "folder": folder}
+
+
+def format_table(records: list[dict[str, Any]], n_seeds: int) -> str:
+    """Markdown table: success (full set), L / reversals / Δκ on the common-success cohort, plan time."""
+    by_seed = [[r for r in records if r["seed_index"] == s] for s in range(n_seeds)]
+    solved = [{(r["scene"], r["start_id"]) for r in rows if r["success"]} for rows in by_seed]
+    cohort = set.intersection(*solved) if solved else set()
+    success = [np.mean([r["success"] for r in rows]) for rows in by_seed]
+    metric = {key: [np.mean([r[key] for r in rows if (r["scene"], r["start_id"]) in cohort]) if cohort else np.nan
+                    for rows in by_seed] for key in ("L", "reversals", "delta_kappa")}
+    times = np.array([r["plan_time_ms"] for r in records])
+    header = "| Method | Succ. | L (m) | Rev. | Δκ | cohort | plan time median / p90 (ms) |\n|---|---|---|---|---|---|---|"
+    row = (f"| NeuralParker ({records[0]['connector']}) | {mean_sd(success)} | {mean_sd(metric['L'])} | "
+           f"{mean_sd(metric['reversals'])} | {mean_sd(metric['delta_kappa'])} | {len(cohort)} | "
+           f"{np.median(times):.2f} / {np.percentile(times, 90):.2f} |")
+    return header + "\n" + row
+
+
+def main(argv=None) -> dict[str, Any]:
+    parser = argparse.ArgumentParser(prog="python -m experiments.evaluate", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
+    parser.add_argument("--checkpoints", type=Path, nargs="+", required=True, help="one checkpoint per seed")
+    parser.add_argument("--connector", choices=["fixed", "ensemble"], help="override the terminal connector")
+    parser.add_argument("--out", type=Path, help="run folder (default: results/evaluate/<timestamp>)")
+    parser.add_argument("--limit", type=int, help="only the first N frozen episodes (smoke runs)")
+    args = parser.parse_args(argv)
+    result = evaluate(args.benchmark, args.checkpoints, args.connector, args.out, args.limit)
+    print(result["table"])
+    print(f"records: {result['folder'] / 'records.csv'}")
+    return result
+
+
+if __name__ == "__main__":
+    main()
