@@ -204,8 +204,7 @@ class Trainer:
             "best_reward": self.best_reward, "torch_rng": torch.get_rng_state(),
             "shuffle_rng": self.shuffle.get_state(), "obs": self.obs.copy(),
             "episode_return": self.episode_return.copy(),
-            "envs": {"S": self.envs.core.S.copy(), "rng": self.envs._rng.bit_generator.state},
-            "select_rng": self.select_envs._rng.bit_generator.state,
+            "envs": self.envs.state_dict(), "select_envs": self.select_envs.state_dict(),
             "curriculum_fraction": self.sampler.fraction,
         }
 
@@ -220,10 +219,9 @@ class Trainer:
         self.shuffle.set_state(payload["shuffle_rng"])
         self.obs = payload["obs"].copy()
         self.episode_return = payload["episode_return"].copy()
-        self.envs.core.S[:] = payload["envs"]["S"]
-        self.envs.core.obs[:] = self.obs
-        self.envs._rng.bit_generator.state = payload["envs"]["rng"]
-        self.select_envs._rng.bit_generator.state = payload["select_rng"]
+        self.envs.load_state_dict(payload["envs"], self.obs)
+        # the selection envs reset before every scoring: only their generator state matters
+        self.select_envs.load_state_dict(payload["select_envs"], self.select_envs.core.obs.copy())
         self.sampler.set_fraction(payload["curriculum_fraction"])
 
     def checkpoint_payload(self, selection: float) -> dict[str, Any]:

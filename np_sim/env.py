@@ -118,6 +118,16 @@ class ParkingVectorEnv(VectorEnv):
         self._rng = np.random.default_rng(seed)
         self._all = np.arange(self.num_envs)
 
+    def state_dict(self) -> dict[str, Any]:
+        """Episode state of every env and the start generator's state (for exact resumption of training)."""
+        return {"S": self.core.S.copy(), "rng": self._rng.bit_generator.state}
+
+    def load_state_dict(self, state: dict[str, Any], obs: np.ndarray) -> None:
+        """Inverse of ``state_dict``; ``obs`` are the current observations saved alongside."""
+        self.core.S[:] = state["S"]
+        self.core.obs[:] = obs
+        self._rng.bit_generator.state = state["rng"]
+
     def set_start_sampler(self, sampler: StartSampler) -> None:
         """Replace the start sampler (e.g. when the curriculum fraction changes)."""
         self.core.sampler = sampler
