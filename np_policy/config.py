@@ -73,6 +73,10 @@ class PPOConfig:
                      "num_test_envs", "epochs"):
             if getattr(self, name) <= 0:
                 raise ConfigError(f"PPOConfig.{name}: expected a positive integer, got {getattr(self, name)!r}")
+        if self.selection_episodes % self.num_test_envs:
+            raise ConfigError(
+                f"PPOConfig.selection_episodes: expected a multiple of num_test_envs={self.num_test_envs}, "
+                f"got {self.selection_episodes}")
         if self.steps_per_collect % self.num_train_envs:
             raise ConfigError(
                 f"PPOConfig.steps_per_collect: expected a multiple of num_train_envs={self.num_train_envs}, "

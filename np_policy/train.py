@@ -176,23 +176,30 @@ class Trainer:
     # ------------------------------------------------------------------------------------------------ selection
     def selection_reward(self) -> tuple[float, float]:
         """Mean return and success of ``selection_episodes`` full-range training-distribution episodes played
-        with the deterministic (mean) action — the checkpoint-selection score (App. A)."""
+        with the deterministic (mean) action on the ``num_test_envs`` test envs, each env playing the same number
+        of episodes in turn — the checkpoint-selection score (App. A)."""
         env = self.select_envs
         n = env.num_envs
+        per_env = self.config.ppo.selection_episodes // n
         obs, _ = env.reset()
         returns = np.zeros(n)
-        success = np.zeros(n, bool)
-        active = np.ones(n, bool)
+        running = np.zeros(n)
+        successes = np.zeros(n)
+        finished = np.zeros(n, np.int64)
         self.model.eval()
         with torch.no_grad():
-            while active.any():
+            while (finished < per_env).any():
                 action = clip_action(self.model.mean_action(torch.from_numpy(obs))).numpy()
                 obs, r, term, trunc, info = env.step(action)
-                returns[active] += r[active]
-                ended = active & (term | trunc)
-                success[ended] = info["success"][ended]
-                active &= ~(term | trunc)
-        return float(returns.mean()), float(success.mean())
+                counting = finished < per_env
+                running[counting] += r[counting]
+                ended = counting & (term | trunc)
+                returns[ended] += running[ended]
+                successes[ended] += info["success"][ended]
+                running[ended] = 0.0
+                finished[ended] += 1
+        total = per_env * n
+        return float(returns.sum() / total), float(successes.sum() / total)
 
     # ------------------------------------------------------------------------------------------------ state
     def state(self) -> dict[str, Any]:

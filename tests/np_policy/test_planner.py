@@ -11,7 +11,8 @@ from np_sim.examples import example_scenes
 from np_sim.starts import UniformStartSampler
 
 TINY = {"benchmark": "examples", "seed": 1, "curriculum_pool": 32,
-        "ppo": {"num_train_envs": 16, "num_test_envs": 4, "steps_per_collect": 256, "steps_per_epoch": 256,
+        "ppo": {"num_train_envs": 16, "num_test_envs": 4, "selection_episodes": 8, "steps_per_collect": 256,
+                "steps_per_epoch": 256,
                 "batch_size": 128, "repeats": 1, "epochs": 1}}
 
 

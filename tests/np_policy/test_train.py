@@ -9,7 +9,8 @@ from np_policy.checkpoint import CheckpointError, load_checkpoint
 from np_policy.train import TrainConfig, main, train
 
 TINY = {"benchmark": "examples", "seed": 3, "curriculum_pool": 32,
-        "ppo": {"num_train_envs": 16, "num_test_envs": 4, "steps_per_collect": 256, "steps_per_epoch": 256,
+        "ppo": {"num_train_envs": 16, "num_test_envs": 4, "selection_episodes": 8, "steps_per_collect": 256,
+                "steps_per_epoch": 256,
                 "batch_size": 128, "repeats": 2, "epochs": 4, "snapshot_every_epochs": 2}}
 
 
