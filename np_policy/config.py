@@ -14,6 +14,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from np_sim.config import config_from_dict
 from np_sim.errors import ConfigError
 
 
@@ -110,7 +111,7 @@ class PPOConfig:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "PPOConfig":
         """Inverse of ``to_dict``; unknown keys are a ConfigError."""
-        return _build(cls, data, "PPOConfig")
+        return config_from_dict(cls, data)
 
 
 @dataclass(frozen=True)
@@ -155,14 +156,4 @@ class NetworkConfig:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "NetworkConfig":
         """Inverse of ``to_dict``; unknown keys are a ConfigError."""
-        return _build(cls, data, "NetworkConfig")
-
-
-def _build(cls, data, path: str):
-    if not isinstance(data, dict):
-        raise ConfigError(f"{path}: expected a mapping, got {type(data).__name__}")
-    names = {f.name for f in dataclasses.fields(cls)}
-    unknown = sorted(set(data) - names)
-    if unknown:
-        raise ConfigError(f"{path}: unknown key(s) {unknown}; expected some of {sorted(names)}")
-    return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in data.items()})
+        return config_from_dict(cls, data)

@@ -30,7 +30,7 @@ from np_policy.checkpoint import CheckpointError, load_checkpoint, save_checkpoi
 from np_policy.config import NetworkConfig, PPOConfig
 from np_policy.network import ActorCritic, clip_action
 from np_policy.ppo import RunningMeanStd, compute_targets, make_optimizer, ppo_update, set_learning_rate
-from np_sim.config import EnvConfig
+from np_sim.config import EnvConfig, config_from_dict
 from np_sim.curriculum import CurriculumSchedule, CurriculumStartSampler
 from np_sim.env import ParkingVectorEnv
 from np_sim.errors import ConfigError
@@ -62,22 +62,12 @@ class TrainConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict (JSON-safe)."""
-        return {"benchmark": self.benchmark, "seed": self.seed, "torch_threads": self.torch_threads,
-                "curriculum_pool": self.curriculum_pool, "env": self.env.to_dict(), "ppo": self.ppo.to_dict(),
-                "network": self.network.to_dict(), "curriculum": self.curriculum.to_dict()}
+        return dataclasses.asdict(self)
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "TrainConfig":
-        """Inverse of ``to_dict``; an unknown key anywhere is a ConfigError naming it."""
-        if not isinstance(data, dict):
-            raise ConfigError(f"TrainConfig: expected a mapping, got {type(data).__name__}")
-        known = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(data) - known)
-        if unknown:
-            raise ConfigError(f"TrainConfig: unknown key(s) {unknown}; expected some of {sorted(known)}")
-        parsers = {"env": EnvConfig.from_dict, "ppo": PPOConfig.from_dict, "network": NetworkConfig.from_dict,
-                   "curriculum": CurriculumSchedule.from_dict}
-        return cls(**{k: parsers[k](v) if k in parsers else v for k, v in data.items()})
+        """Inverse of ``to_dict``; an unknown key anywhere is a ConfigError naming its field path."""
+        return config_from_dict(cls, data)
 
 
 def training_scenes(benchmark: str):

@@ -7,6 +7,7 @@ footprint vs reference-point checks), never a fork. ``from_dict`` rejects unknow
 from __future__ import annotations
 
 import dataclasses
+import typing
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -167,24 +168,24 @@ class EnvConfig:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "EnvConfig":
         """Inverse of ``to_dict``; unknown keys are a ConfigError naming the field path."""
-        return _build(cls, data, "EnvConfig")
+        return config_from_dict(cls, data)
 
 
-def _build(cls, data, path: str):
+def config_from_dict(cls, data, path: str | None = None):
+    """Build the frozen config dataclass ``cls`` from a mapping, recursing into fields typed as dataclasses; lists
+    become tuples. An unknown key or a non-mapping is a ConfigError naming its field path (``EnvConfig.reward``)."""
+    path = cls.__name__ if path is None else path
     if not isinstance(data, dict):
         raise ConfigError(f"{path}: expected a mapping, got {type(data).__name__}")
-    fields = {f.name: f for f in dataclasses.fields(cls)}
-    unknown = sorted(set(data) - set(fields))
+    names = {f.name for f in dataclasses.fields(cls)}
+    unknown = sorted(set(data) - names)
     if unknown:
-        raise ConfigError(f"{path}: unknown key(s) {unknown}; expected some of {sorted(fields)}")
+        raise ConfigError(f"{path}: unknown key(s) {unknown}; expected some of {sorted(names)}")
+    hints = typing.get_type_hints(cls)
     kwargs = {}
     for name, value in data.items():
-        sub = {"vehicle": VehicleSpec, "observation": ObservationConfig, "connector": ConnectorConfig,
-               "reward": RewardConfig, "episode": EpisodeConfig}.get(name) if cls is EnvConfig else None
-        if sub is not None:
-            kwargs[name] = _build(sub, value, f"{path}.{name}")
-        elif isinstance(value, list):
-            kwargs[name] = tuple(value)
+        if dataclasses.is_dataclass(hints[name]):
+            kwargs[name] = config_from_dict(hints[name], value, f"{path}.{name}")
         else:
-            kwargs[name] = value
+            kwargs[name] = tuple(value) if isinstance(value, list) else value
     return cls(**kwargs)

@@ -30,6 +30,7 @@ from typing import Any, Literal
 import numpy as np
 
 from np_sim.benchmarks.frozen import draw_frozen_starts
+from np_sim.config import config_from_dict
 from np_sim.errors import ConfigError
 from np_sim.geodesic import GeodesicGrid, geodesic_grid
 from np_sim.scene import Scene
@@ -83,13 +84,7 @@ class CurriculumSchedule:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "CurriculumSchedule":
         """Inverse of `to_dict`; an unknown key or a bad value is a ConfigError naming it."""
-        if not isinstance(data, dict):
-            raise ConfigError(f"CurriculumSchedule: expected a mapping, got {type(data).__name__}")
-        names = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(data) - names)
-        if unknown:
-            raise ConfigError(f"CurriculumSchedule: unknown key(s) {unknown}; expected some of {sorted(names)}")
-        return cls(**data)
+        return config_from_dict(cls, data)
 
 
 def active_count(fraction: float, pool_size: int) -> int:
