@@ -1,0 +1,234 @@
+"""Compiled Reeds–Shepp shortest paths (Reeds & Shepp 1990, Pacific J. Math. 145(2), §8 formulas 8.1–8.11).
+
+Work is done in the normalised frame of the start pose: goal (x, y, φ) relative to the start, lengths in units of
+the minimum turning radius r = 1/κ_max. A *word* is a sequence of up to five pieces, each a letter (``LEFT`` = +1,
+``STRAIGHT`` = 0, ``RIGHT`` = −1: the physical steering direction) and a signed normalised length (sign = gear).
+Eight base formulas, each closed in (x, y, φ), generate all 48 words through the paper's symmetries:
+
+* timeflip (x, y, φ) → (−x, y, −φ): every piece length negated (gears swapped);
+* reflect  (x, y, φ) → (x, −y, −φ): left and right swapped;
+* backwards (x, y, φ) → (x cos φ + y sin φ, x sin φ − y cos φ, φ): the word read in reverse order.
+
+Family counts: CSC 8, CCC 12 (C|C|C, C|CC, CC|C), CCCC 8 (CC|CC, C|CC|C), CCSC 16 (C|C_{π/2}SC and CSC_{π/2}|C in both
+turning orders), CCSCC 4 (C|C_{π/2}SC_{π/2}|C) — 48 in all.
+
+The pieces map onto the action arcs of paper eq:arc (SPEC §2): a piece of letter c ∈ {+1, 0, −1} and normalised
+signed length t is the arc (κ, l) with l = t / κ_max and κ = −sgn(l)·c·κ_max (physical steering c·κ_max).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from np_sim.kernels.kinematics import wrap_angle
+
+LEFT, STRAIGHT, RIGHT = 1, 0, -1
+_ZERO = 1e-14  # accept a piece whose sign test fails by rounding only
+_HALF_PI = 0.5 * math.pi
+
+# Letters of the eight base words (rows padded with STRAIGHT; _N_PIECES gives the used count) and whether the
+# "backwards" symmetry generates new words from them (it does for the asymmetric CCC and CCSC bases).
+_BASE_LETTERS = np.array(
+    [
+        [LEFT, STRAIGHT, LEFT, 0, 0],  # 8.1  L+ S+ L+
+        [LEFT, STRAIGHT, RIGHT, 0, 0],  # 8.2  L+ S+ R+
+        [LEFT, RIGHT, LEFT, 0, 0],  # 8.3/8.4  L+ R− L
+        [LEFT, RIGHT, LEFT, RIGHT, 0],  # 8.7  L+ R+u L−u R−
+        [LEFT, RIGHT, LEFT, RIGHT, 0],  # 8.8  L+ R−u L−u R+
+        [LEFT, RIGHT, STRAIGHT, LEFT, 0],  # 8.9  L+ R−π/2 S− L−
+        [LEFT, RIGHT, STRAIGHT, RIGHT, 0],  # 8.10 L+ R−π/2 S− R−
+        [LEFT, RIGHT, STRAIGHT, LEFT, RIGHT],  # 8.11 L+ R−π/2 S− L−π/2 R+
+    ],
+    dtype=np.int64,
+)
+_N_PIECES = np.array([3, 3, 3, 4, 4, 4, 4, 5], dtype=np.int64)
+_HAS_BACKWARDS = np.array([False, False, True, False, False, True, True, False])
+N_BASES = 8
+MAX_PIECES = 5
+
+
+@njit(cache=True, error_model="numpy")
+def _tau_omega(u: float, v: float, xi: float, eta: float, phi: float):
+    """(τ, ω) of the CCCC formulas 8.7/8.8: the first and last turn angles given the middle ones."""
+    delta = wrap_angle(u - v)
+    a = math.sin(u) - math.sin(delta)
+    b = math.cos(u) - math.cos(delta) - 1.0
+    t1 = math.atan2(eta * a - xi * b, xi * a + eta * b)
+    t2 = 2.0 * (math.cos(delta) - math.cos(v) - math.cos(u)) + 3.0
+    tau = wrap_angle(t1 + math.pi) if t2 < 0.0 else wrap_angle(t1)
+    return tau, wrap_angle(tau - u + v - phi)
+
+
+@njit(cache=True, error_model="numpy")
+def _base_word(k: int, x: float, y: float, phi: float, out: np.ndarray) -> bool:
+    """Solve base word k (Reeds–Shepp formula 8.1–8.11) for the normalised goal (x, y, φ).
+
+    Writes the signed normalised piece lengths into ``out`` (5,) and returns whether the word exists with the
+    gear pattern of its name.
+    """
+    sp, cp = math.sin(phi), math.cos(phi)
+    if k == 0:  # 8.1 LSL
+        xi, eta = x - sp, y - 1.0 + cp
+        u = math.hypot(xi, eta)
+        t = math.atan2(eta, xi)
+        v = wrap_angle(phi - t)
+        out[0], out[1], out[2] = t, u, v
+        return t >= -_ZERO and v >= -_ZERO
+    if k == 1:  # 8.2 LSR
+        xi, eta = x + sp, y - 1.0 - cp
+        rho2 = xi * xi + eta * eta
+        if rho2 < 4.0:
+            return False
+        u = math.sqrt(rho2 - 4.0)
+        t = wrap_angle(math.atan2(eta, xi) + math.atan2(2.0, u))
+        v = wrap_angle(t - phi)
+        out[0], out[1], out[2] = t, u, v
+        return t >= -_ZERO and v >= -_ZERO
+    if k == 2:  # 8.3/8.4 L+R−L (the last turn's gear is free: C|C|C and C|CC)
+        xi, eta = x - sp, y - 1.0 + cp
+        rho = math.hypot(xi, eta)
+        if rho > 4.0:
+            return False
+        u = -2.0 * math.asin(0.25 * rho)
+        t = wrap_angle(math.atan2(eta, xi) + 0.5 * u + math.pi)
+        v = wrap_angle(phi - t + u)
+        out[0], out[1], out[2] = t, u, v
+        return t >= -_ZERO and u <= _ZERO
+    if k == 3:  # 8.7 L+ R+u L−u R−
+        xi, eta = x + sp, y - 1.0 - cp
+        rho = 0.25 * (2.0 + math.hypot(xi, eta))
+        if rho > 1.0:
+            return False
+        u = math.acos(rho)
+        t, v = _tau_omega(u, -u, xi, eta, phi)
+        out[0], out[1], out[2], out[3] = t, u, -u, v
+        return t >= -_ZERO and v <= _ZERO
+    if k == 4:  # 8.8 L+ R−u L−u R+
+        xi, eta = x + sp, y - 1.0 - cp
+        rho = (20.0 - xi * xi - eta * eta) / 16.0
+        if rho < 0.0 or rho > 1.0:
+            return False
+        u = -math.acos(rho)
+        if u < -_HALF_PI:
+            return False
+        t, v = _tau_omega(u, u, xi, eta, phi)
+        out[0], out[1], out[2], out[3] = t, u, u, v
+        return t >= -_ZERO and v >= -_ZERO
+    if k == 5:  # 8.9 L+ R−π/2 S− L−
+        xi, eta = x - sp, y - 1.0 + cp
+        rho = math.hypot(xi, eta)
+        if rho < 2.0:
+            return False
+        r = math.sqrt(rho * rho - 4.0)
+        u = 2.0 - r
+        t = wrap_angle(math.atan2(eta, xi) + math.atan2(r, -2.0))
+        v = wrap_angle(phi - _HALF_PI - t)
+        out[0], out[1], out[2], out[3] = t, -_HALF_PI, u, v
+        return t >= -_ZERO and u <= _ZERO and v <= _ZERO
+    if k == 6:  # 8.10 L+ R−π/2 S− R−
+        xi, eta = x + sp, y - 1.0 - cp
+        rho = math.hypot(xi, eta)
+        if rho < 2.0:
+            return False
+        t = math.atan2(xi, -eta)
+        u = 2.0 - rho
+        v = wrap_angle(t + _HALF_PI - phi)
+        out[0], out[1], out[2], out[3] = t, -_HALF_PI, u, v
+        return t >= -_ZERO and u <= _ZERO and v <= _ZERO
+    # k == 7: 8.11 L+ R−π/2 S− L−π/2 R+
+    xi, eta = x + sp, y - 1.0 - cp
+    rho = math.hypot(xi, eta)
+    if rho < 2.0:
+        return False
+    u = 4.0 - math.sqrt(rho * rho - 4.0)
+    if u > _ZERO:
+        return False
+    t = wrap_angle(math.atan2((4.0 - u) * xi - 2.0 * eta, -2.0 * xi + (u - 4.0) * eta))
+    v = wrap_angle(t - phi)
+    out[0], out[1], out[2], out[3], out[4] = t, -_HALF_PI, u, -_HALF_PI, v
+    return t >= -_ZERO and v >= -_ZERO
+
+
+@njit(cache=True, error_model="numpy")
+def shortest_word(x: float, y: float, phi: float, letters: np.ndarray, lengths: np.ndarray) -> int:
+    """Shortest Reeds–Shepp word to the normalised goal (x, y, φ) over all 48 words.
+
+    Fills ``letters`` (5,) int64 and ``lengths`` (5,) float (signed, normalised) and returns the piece count.
+    """
+    buf = np.empty(MAX_PIECES)
+    best = np.inf
+    n_best = 0
+    cphi, sphi = math.cos(phi), math.sin(phi)
+    xb, yb = x * cphi + y * sphi, x * sphi - y * cphi
+    for k in range(N_BASES):
+        n = _N_PIECES[k]
+        for backwards in range(2 if _HAS_BACKWARDS[k] else 1):
+            bx, by = (xb, yb) if backwards else (x, y)
+            for sym in range(4):
+                timeflip, reflect = sym & 1, sym >> 1
+                qx = -bx if timeflip else bx
+                qy = -by if reflect else by
+                qphi = -phi if timeflip != reflect else phi
+                if not _base_word(k, qx, qy, qphi, buf):
+                    continue
+                total = 0.0
+                for i in range(n):
+                    total += abs(buf[i])
+                if total >= best:
+                    continue
+                best = total
+                n_best = n
+                for i in range(n):
+                    j = n - 1 - i if backwards else i
+                    letter = _BASE_LETTERS[k, j]
+                    letters[i] = -letter if reflect else letter
+                    lengths[i] = -buf[j] if timeflip else buf[j]
+    return n_best
+
+
+@njit(cache=True, error_model="numpy")
+def relative_goal(x0: float, y0: float, th0: float, x1: float, y1: float, th1: float, kappa_max: float):
+    """Goal (x1, y1, θ1) in the start's frame, scaled by κ_max: the normalised (x, y, φ) of the formulas."""
+    dx, dy = x1 - x0, y1 - y0
+    c, s = math.cos(th0), math.sin(th0)
+    return (c * dx + s * dy) * kappa_max, (-s * dx + c * dy) * kappa_max, wrap_angle(th1 - th0)
+
+
+@njit(cache=True, error_model="numpy")
+def rs_length(x0: float, y0: float, th0: float, x1: float, y1: float, th1: float, kappa_max: float) -> float:
+    """Length (m) of the shortest Reeds–Shepp path between two poses at curvature bound κ_max."""
+    x, y, phi = relative_goal(x0, y0, th0, x1, y1, th1, kappa_max)
+    letters = np.empty(MAX_PIECES, np.int64)
+    lengths = np.empty(MAX_PIECES)
+    n = shortest_word(x, y, phi, letters, lengths)
+    total = 0.0
+    for i in range(n):
+        total += abs(lengths[i])
+    return total / kappa_max
+
+
+@njit(cache=True, error_model="numpy")
+def rs_arcs_into(x0: float, y0: float, th0: float, x1: float, y1: float, th1: float, kappa_max: float,
+                 min_length: float, out: np.ndarray) -> int:
+    """Shortest Reeds–Shepp path as eq:arc arcs (κ, l) written into ``out`` (5, 2); returns the arc count.
+
+    A piece of letter c and normalised length t becomes l = t/κ_max, κ = −sgn(l)·c·κ_max; pieces shorter than
+    ``min_length`` (m) are dropped (they only arise from rounding at word boundaries).
+    """
+    x, y, phi = relative_goal(x0, y0, th0, x1, y1, th1, kappa_max)
+    letters = np.empty(MAX_PIECES, np.int64)
+    lengths = np.empty(MAX_PIECES)
+    n = shortest_word(x, y, phi, letters, lengths)
+    m = 0
+    for i in range(n):
+        length = lengths[i] / kappa_max
+        if abs(length) < min_length:
+            continue
+        gear = 1.0 if length > 0.0 else -1.0
+        out[m, 0] = -gear * letters[i] * kappa_max
+        out[m, 1] = length
+        m += 1
+    return m
