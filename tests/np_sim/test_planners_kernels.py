@@ -1,0 +1,98 @@
+"""Compiled pieces of the planners against slow exact versions on seeded random inputs: the heap (vs heapq), the
+guide distance (vs shapely), the holonomic grid Dijkstra (vs a plain-Python Dijkstra with the same step rules)
+and the lattice binning (vs its formula)."""
+
+from __future__ import annotations
+
+import heapq
+import math
+
+import numpy as np
+import pytest
+from shapely.geometry import LineString, Point
+
+from np_sim.planners.heap import heap_pop, heap_push
+from np_sim.planners.heuristic import grid_dijkstra
+from np_sim.planners.search_kernels import lattice_cell, polyline_distance
+
+
+def test_heap_pops_in_heapq_order():
+    rng = np.random.default_rng(0)
+    keys, ids = np.empty(500), np.empty(500, np.int64)
+    size, reference = 0, []
+    for step in range(2000):
+        if size < 500 and (size == 0 or rng.random() < 0.6):
+            key = float(rng.integers(0, 50))  # many ties
+            size = heap_push(keys, ids, size, key, step)
+            heapq.heappush(reference, (key, step))
+        else:
+            key, item, size = heap_pop(keys, ids, size)
+            want_key, _ = heapq.heappop(reference)
+            assert key == want_key
+    assert size == len(reference)
+
+
+def test_polyline_distance_matches_shapely():
+    rng = np.random.default_rng(1)
+    for _ in range(300):
+        pts = rng.uniform(-10, 10, (int(rng.integers(2, 8)), 2))
+        q = rng.uniform(-15, 15, 2)
+        assert polyline_distance(q[0], q[1], pts) == pytest.approx(LineString(pts).distance(Point(q)), abs=1e-12)
+    assert polyline_distance(3.0, 4.0, np.zeros((1, 2))) == pytest.approx(5.0)
+
+
+def _slow_dijkstra(free: np.ndarray, goal: tuple[int, int], cell: float) -> np.ndarray:
+    ny, nx = free.shape
+    dist = {goal: 0.0}
+    queue = [(0.0, goal)]
+    while queue:
+        d, (r, c) = heapq.heappop(queue)
+        if d > dist[(r, c)]:
+            continue
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                rr, cc = r + dr, c + dc
+                if (dr, dc) == (0, 0) or not (0 <= rr < ny and 0 <= cc < nx) or not free[rr, cc]:
+                    continue
+                if dr and dc and not (free[r + dr, c] and free[r, c + dc]):
+                    continue
+                nd = d + cell * math.hypot(dr, dc)
+                if nd < dist.get((rr, cc), math.inf):
+                    dist[(rr, cc)] = nd
+                    heapq.heappush(queue, (nd, (rr, cc)))
+    out = np.full((ny, nx), np.inf)
+    for (r, c), d in dist.items():
+        out[r, c] = d
+    filled = out.copy()
+    for r in range(ny):
+        for c in range(nx):
+            if free[r, c] or (r, c) == goal:
+                continue
+            for dr in (-1, 0, 1):
+                for dc in (-1, 0, 1):
+                    rr, cc = r + dr, c + dc
+                    if 0 <= rr < ny and 0 <= cc < nx and free[rr, cc]:
+                        filled[r, c] = min(filled[r, c], out[rr, cc] + cell * math.hypot(dr, dc))
+    return filled
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_grid_dijkstra_matches_slow_version(seed):
+    rng = np.random.default_rng(seed)
+    free = rng.random((17, 23)) > 0.3
+    goal = (int(rng.integers(0, 17)), int(rng.integers(0, 23)))
+    got = grid_dijkstra(free, goal[0], goal[1], 0.5)
+    want = _slow_dijkstra(free, goal, 0.5)
+    np.testing.assert_array_equal(np.isinf(got), np.isinf(want))
+    np.testing.assert_allclose(got[np.isfinite(want)], want[np.isfinite(want)], rtol=0, atol=1e-9)
+
+
+def test_lattice_cell_bins_position_and_heading():
+    rng = np.random.default_rng(2)
+    nx, ny, nth, res = 40, 30, 72, 0.5
+    for _ in range(500):
+        x, y, th = rng.uniform(-1, 21), rng.uniform(-1, 16), rng.uniform(-4, 4)
+        ix, iy = math.floor(x / res), math.floor(y / res)
+        it = math.floor((math.remainder(th, 2 * math.pi) + math.pi) / (2 * math.pi) * nth) % nth
+        want = (iy * nx + ix) * nth + it if (0 <= ix < nx and 0 <= iy < ny) else -1
+        assert lattice_cell(x, y, th, 0.0, 0.0, res, nx, ny, nth) == want
