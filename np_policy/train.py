@@ -34,6 +34,7 @@ from np_sim.config import EnvConfig, config_from_dict
 from np_sim.curriculum import CurriculumSchedule, CurriculumStartSampler
 from np_sim.env import ParkingVectorEnv
 from np_sim.errors import ConfigError
+from np_sim.scene import Scene
 from np_sim.starts import UniformStartSampler
 
 BENCHMARKS = ("factorial", "topology", "examples")
@@ -44,7 +45,8 @@ class TrainConfig:
     """Everything a run depends on; written beside its checkpoints and stored inside them."""
 
     benchmark: str = "factorial"
-    """Training scenes: 'factorial', 'topology' (their train splits) or 'examples' (the hand-made scenes)."""
+    """Training scenes: 'factorial', 'topology' (their train splits), 'examples' (the hand-made scenes), or the
+    path of a scene JSON file or of a folder of them (your own scenes)."""
     seed: int = 0
     """Seed of torch, the envs' starts and the minibatch shuffling."""
     torch_threads: int = 0
@@ -57,8 +59,9 @@ class TrainConfig:
     curriculum: CurriculumSchedule = field(default_factory=CurriculumSchedule)
 
     def __post_init__(self) -> None:
-        if self.benchmark not in BENCHMARKS:
-            raise ConfigError(f"TrainConfig.benchmark: expected one of {list(BENCHMARKS)}, got {self.benchmark!r}")
+        if self.benchmark not in BENCHMARKS and not _is_scene_path(self.benchmark):
+            raise ConfigError(f"TrainConfig.benchmark: expected one of {list(BENCHMARKS)} or the path of a scene "
+                              f"JSON file or folder, got {self.benchmark!r}")
 
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict (JSON-safe)."""
@@ -70,8 +73,19 @@ class TrainConfig:
         return config_from_dict(cls, data)
 
 
+def _is_scene_path(benchmark: str) -> bool:
+    path = Path(benchmark)
+    return path.is_dir() or (path.suffix == ".json" and path.is_file())
+
+
 def training_scenes(benchmark: str):
-    """The training split of ``benchmark`` (or the hand-made example scenes)."""
+    """The training split of ``benchmark``, the hand-made example scenes, or the scenes of a JSON file or folder."""
+    if _is_scene_path(benchmark):
+        path = Path(benchmark)
+        files = sorted(path.glob("*.json")) if path.is_dir() else [path]
+        if not files:
+            raise ConfigError(f"TrainConfig.benchmark: folder {benchmark!r} holds no *.json scene files")
+        return [Scene.load(f) for f in files]
     if benchmark == "examples":
         from np_sim.examples import example_scenes
 
@@ -301,7 +315,8 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
 def main(argv=None) -> list[dict[str, Any]]:
     parser = argparse.ArgumentParser(prog="python -m np_policy.train", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--benchmark", choices=BENCHMARKS, default="factorial", help="training scenes")
+    parser.add_argument("--benchmark", default="factorial",
+                        help=f"training scenes: one of {', '.join(BENCHMARKS)}, or a scene JSON file or folder")
     parser.add_argument("--seed", type=int, default=0, help="training seed")
     parser.add_argument("--config", type=Path, help="JSON file with TrainConfig fields overriding the defaults "
                         "(nested: env, ppo, network, curriculum); unknown keys are errors")

@@ -64,3 +64,13 @@ def test_unknown_config_keys_are_errors():
 
     with pytest.raises(ConfigError, match=r"unknown key\(s\) \['epohcs'\]"):
         TrainConfig.from_dict({"ppo": {"epohcs": 3}})
+
+
+def test_benchmark_must_name_a_benchmark_or_scene_files(tmp_path):
+    from np_policy.train import training_scenes
+    from np_sim.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"TrainConfig.benchmark: expected one of .* got 'factorail'"):
+        TrainConfig(benchmark="factorail")
+    with pytest.raises(ConfigError, match=r"holds no \*.json scene files"):
+        training_scenes(str(tmp_path))
