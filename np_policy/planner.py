@@ -2,7 +2,8 @@
 
 ``NeuralParkerPlanner.from_checkpoint(path).plan(scene, start) -> Plan`` plays the mean action in the same
 environment the policy was trained in (``ParkingEnv`` with the checkpoint's ``EnvConfig``), so arcs, collision
-checks, the heading gate and the Hermite selection follow exactly the env's rules.
+checks, the heading gate and the Hermite selection follow exactly the env's rules. The mean action is evaluated by
+``CompiledActor`` (the same weights in one numba function, about 20× faster than torch at batch 1).
 """
 
 from __future__ import annotations
@@ -12,10 +13,10 @@ import weakref
 from pathlib import Path
 
 import numpy as np
-import torch
 
 from np_policy.checkpoint import load_checkpoint
-from np_policy.network import ActorCritic, clip_action
+from np_policy.inference import CompiledActor
+from np_policy.network import ActorCritic
 from np_policy.train import TrainConfig
 from np_sim.env import ParkingEnv
 from np_sim.frames import from_target_frame
@@ -29,6 +30,7 @@ class NeuralParkerPlanner:
 
     def __init__(self, model: ActorCritic, config: TrainConfig):
         self.model = model.eval()
+        self.actor = CompiledActor(self.model)
         self.config = config
         self._envs: weakref.WeakKeyDictionary[Scene, ParkingEnv] = weakref.WeakKeyDictionary()
 
@@ -56,13 +58,12 @@ class NeuralParkerPlanner:
         obs, _ = env.reset(options={"start": np.asarray(start, float)})
         kappa_max, l_max = self.config.env.vehicle.kappa_max, self.config.env.episode.max_length_m
         arcs = []
-        with torch.no_grad():
-            while True:
-                a = clip_action(self.model.mean_action(torch.from_numpy(obs[None]))).numpy()[0]
-                obs, _, terminated, truncated, info = env.step(a)
-                arcs.append((float(a[0]) * kappa_max, float(a[1]) * l_max))
-                if terminated or truncated:
-                    break
+        while True:
+            a = self.actor(obs)
+            obs, _, terminated, truncated, info = env.step(a)
+            arcs.append((float(a[0]) * kappa_max, float(a[1]) * l_max))
+            if terminated or truncated:
+                break
         hermite = None
         h = info["hermite_index"]
         if h >= 0:

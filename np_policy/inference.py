@@ -1,0 +1,187 @@
+"""Compiled single-observation inference of the actor's mean action (the planner's hot path).
+
+``ActorCritic.mean_action`` in torch costs about 0.4 ms per call at batch 1 on this CPU, almost all of it
+per-operator overhead; a plan calls it once per arc. ``CompiledActor`` copies the trained weights into numpy
+arrays and evaluates the same network — stream MLPs, the geometry-token attention block, the global–local fusion
+block(s), the projection and the actor MLP of ``np_policy.network`` (paper §III-C, App. A Table IV) — in one
+numba function, so a call costs tens of microseconds. It is tested against the torch model to float32 rounding.
+
+Layout: the weights are flattened into two typed lists, matrices (in × out, so ``x @ W``) and vectors (biases,
+LayerNorm gains and offsets), in exactly the order ``_mean_action`` consumes them; ``_export`` is the one place
+that order is written on the Python side.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import torch
+from numba import njit
+from numba.typed import List
+from torch import nn
+
+import np_sim.kernels  # noqa: F401  (sets numba's cache directory)
+from np_policy.network import ActorCritic, SelfAttentionBlock
+
+
+@njit(cache=True, error_model="numpy")
+def _dense(x, mats, vecs, cursor, relu):
+    """y = x W + b (optionally ReLU) with the next matrix and vector; returns y and the advanced cursor."""
+    y = np.ascontiguousarray(x) @ mats[cursor[0]] + vecs[cursor[1]]
+    cursor[0] += 1
+    cursor[1] += 1
+    if relu:
+        y = np.maximum(y, np.float32(0.0))
+    return y
+
+
+@njit(cache=True, error_model="numpy")
+def _layer_norm(x, vecs, cursor, eps):
+    """Row-wise LayerNorm (biased variance) with the next gain and offset vectors."""
+    gain, offset = vecs[cursor[1]], vecs[cursor[1] + 1]
+    cursor[1] += 2
+    out = np.empty_like(x)
+    for r in range(x.shape[0]):
+        mean = x[r].mean()
+        var = ((x[r] - mean) ** 2).mean()
+        out[r] = (x[r] - mean) / np.sqrt(var + eps) * gain + offset
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def _attention_block(x, heads, mats, vecs, cursor, eps):
+    """Post-norm transformer layer of ``SelfAttentionBlock``: x ← LN(x + MHA(x)); x ← LN(x + FF(x))."""
+    s, d = x.shape
+    dh = d // heads
+    qkv = _dense(x, mats, vecs, cursor, False)
+    attended = np.empty((s, d), np.float32)
+    scale = np.float32(1.0 / math.sqrt(dh))
+    for h in range(heads):
+        q = np.ascontiguousarray(qkv[:, h * dh:(h + 1) * dh])
+        k = np.ascontiguousarray(qkv[:, d + h * dh:d + (h + 1) * dh])
+        v = np.ascontiguousarray(qkv[:, 2 * d + h * dh:2 * d + (h + 1) * dh])
+        scores = (q @ k.T.copy()) * scale
+        for r in range(s):
+            row = np.exp(scores[r] - scores[r].max())
+            scores[r] = row / row.sum()
+        attended[:, h * dh:(h + 1) * dh] = scores @ v
+    x = _layer_norm(x + _dense(attended, mats, vecs, cursor, False), vecs, cursor, eps)
+    hidden = _dense(x, mats, vecs, cursor, True)
+    return _layer_norm(x + _dense(hidden, mats, vecs, cursor, False), vecs, cursor, eps)
+
+
+@njit(cache=True, error_model="numpy")
+def _mean_action(obs, mats, vecs, sections, shape, eps):
+    """Deterministic action of one flat observation, clipped to [−1, 1] (``ActorCritic.mean_action``).
+
+    ``sections`` (4, 2): (start, stop) of ego, lidar, obstacles, boundary, stop = start when absent;
+    ``shape``: obstacle vertex-pair width, geometry heads, fusion heads, fusion depth, actor layers.
+    """
+    cursor = np.zeros(2, np.int64)
+    tokens = List()
+    hidden = _dense(obs[sections[0, 0]:sections[0, 1]].reshape(1, -1), mats, vecs, cursor, True)
+    tokens.append(_dense(hidden, mats, vecs, cursor, False))
+    if sections[1, 1] > sections[1, 0]:
+        hidden = _dense(obs[sections[1, 0]:sections[1, 1]].reshape(1, -1), mats, vecs, cursor, True)
+        tokens.append(_dense(hidden, mats, vecs, cursor, False))
+    slots = List()
+    if sections[2, 1] > sections[2, 0]:
+        width = shape[0]
+        rows = np.ascontiguousarray(obs[sections[2, 0]:sections[2, 1]]).reshape(-1, width)
+        slots.append(_dense(_dense(rows, mats, vecs, cursor, True), mats, vecs, cursor, False))
+    if sections[3, 1] > sections[3, 0]:
+        rows = np.ascontiguousarray(obs[sections[3, 0]:sections[3, 1]]).reshape(-1, 4)
+        slots.append(_dense(_dense(rows, mats, vecs, cursor, True), mats, vecs, cursor, False))
+    if len(slots) > 0:
+        n = 0
+        for part in slots:
+            n += part.shape[0]
+        geometry = np.empty((n, slots[0].shape[1]), np.float32)
+        row = 0
+        for part in slots:
+            geometry[row:row + part.shape[0]] = part
+            row += part.shape[0]
+        geometry += mats[cursor[0]]  # learned slot positions
+        cursor[0] += 1
+        geometry = _attention_block(geometry, shape[1], mats, vecs, cursor, eps)
+        summary = np.empty((1, geometry.shape[1]), np.float32)
+        for c in range(geometry.shape[1]):
+            summary[0, c] = geometry[:, c].mean()
+        tokens.append(_dense(summary, mats, vecs, cursor, False))
+    d = tokens[0].shape[1]
+    fused = np.empty((len(tokens), d), np.float32)
+    for i in range(len(tokens)):
+        fused[i] = tokens[i][0]
+    for _ in range(shape[3]):
+        fused = _attention_block(fused, shape[2], mats, vecs, cursor, eps)
+    feature = _dense(fused.reshape(1, -1), mats, vecs, cursor, True)
+    for layer in range(shape[4]):
+        feature = _dense(feature, mats, vecs, cursor, layer < shape[4] - 1)
+    return np.minimum(np.maximum(feature[0], np.float32(-1.0)), np.float32(1.0))
+
+
+def _export(model: ActorCritic) -> tuple[List, List]:
+    """The weights in ``_mean_action``'s consumption order (matrices transposed to in × out)."""
+    mats, vecs = List(), List()
+
+    def dense(layer: nn.Linear) -> None:
+        mats.append(np.ascontiguousarray(layer.weight.detach().numpy().T, dtype=np.float32))
+        vecs.append(np.ascontiguousarray(layer.bias.detach().numpy(), dtype=np.float32))
+
+    def norm(layer: nn.LayerNorm) -> None:
+        vecs.append(layer.weight.detach().numpy().astype(np.float32))
+        vecs.append(layer.bias.detach().numpy().astype(np.float32))
+
+    def block(b: SelfAttentionBlock) -> None:
+        dense(b.qkv), dense(b.out), norm(b.norm1), dense(b.ff[0]), dense(b.ff[2]), norm(b.norm2)
+
+    def mlp(seq: nn.Sequential) -> None:
+        for layer in seq:
+            if isinstance(layer, nn.Linear):
+                dense(layer)
+
+    enc = model.encoder
+    for stream in (enc.ego, enc.lidar, enc.obstacle, enc.boundary):
+        if stream is not None:
+            mlp(stream)
+    if enc.n_slots:
+        mats.append(enc.slot_position.detach().numpy().astype(np.float32).copy())
+        block(enc.geometry_attention)
+        dense(enc.geometry_summary)
+    for b in enc.fusion:
+        block(b)
+    dense(enc.project)
+    mlp(model.actor)
+    return mats, vecs
+
+
+class CompiledActor:
+    """The mean action of a trained ``ActorCritic`` for one observation, compiled (see module docstring)."""
+
+    def __init__(self, model: ActorCritic):
+        enc = model.encoder
+        norms = [m for m in model.modules() if isinstance(m, nn.LayerNorm)]
+        eps = {m.eps for m in norms}
+        if len(eps) > 1:
+            raise ValueError(f"CompiledActor: LayerNorms with different eps {sorted(eps)} are not supported")
+        self.eps = np.float32(eps.pop() if eps else 1e-5)
+        self.sections = np.zeros((4, 2), np.int64)
+        for i, name in enumerate(("ego", "lidar", "obstacles", "boundary")):
+            if name in enc.sections:
+                self.sections[i] = enc.sections[name]
+        net = enc.net_config
+        n_actor = sum(isinstance(m, nn.Linear) for m in model.actor)
+        self.shape = np.array([2 * enc.obs_config.vertices_per_obstacle, net.token_heads, net.fusion_heads,
+                               len(enc.fusion), n_actor], np.int64)
+        self.obs_size = enc.obs_size
+        with torch.no_grad():
+            self.mats, self.vecs = _export(model)
+
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        """(2,) float32 action in [−1, 1] for one flat observation of length ``obs_size``."""
+        obs = np.ascontiguousarray(obs, dtype=np.float32)
+        if obs.shape != (self.obs_size,):
+            raise ValueError(f"CompiledActor: expected one observation of shape ({self.obs_size},), "
+                             f"got {obs.shape}")
+        return _mean_action(obs, self.mats, self.vecs, self.sections, self.shape, self.eps)
