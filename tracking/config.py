@@ -1,0 +1,202 @@
+"""Configuration of the closed-loop testbed: one frozen dataclass per component (STYLE §2).
+
+The vehicle's geometry (footprint, wheelbase, curvature bound) comes from `np_sim.vehicle.VehicleSpec`; these
+configs hold only what the spec does not: masses, wheels, actuators, rates, gains and tolerances.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from np_sim.config import config_from_dict
+from np_sim.vehicle import VehicleSpec
+
+
+@dataclass(frozen=True)
+class VehicleModelConfig:
+    """Physical parameters of the MJCF vehicle beyond `VehicleSpec` (see models/mjcf/vehicle_template.xml)."""
+
+    timestep_s: float = 0.004
+    """MuJoCo integration step (s)."""
+    chassis_mass_kg: float = 1500.0
+    """Mass of the chassis (kg)."""
+    com_height_m: float = 0.55
+    """Height of the chassis centre of mass above the ground (m)."""
+    wheel_mass_kg: float = 20.0
+    """Mass of each wheel (kg)."""
+    knuckle_mass_kg: float = 5.0
+    """Mass of each front steering knuckle (kg); its inertia is that of a 0.2 m solid sphere."""
+    wheel_radius_m: float = 0.33
+    """Tyre radius (m)."""
+    tyre_width_m: float = 0.22
+    """Tyre width (m), visual only."""
+    wheel_inset_m: float = 0.2
+    """Lateral distance from the body side to a wheel centre (m); track = width − 2·inset."""
+    ground_clearance_m: float = 0.15
+    """Height of the chassis box bottom above the ground (m)."""
+    body_height_m: float = 1.5
+    """Height of the chassis box top above the ground (m)."""
+    tyre_friction: float = 1.0
+    """Tyre–ground sliding friction coefficient."""
+    wheel_damping: float = 0.5
+    """Rolling resistance as viscous damping on each wheel hinge (N·m·s/rad)."""
+    wheel_armature: float = 0.05
+    """Rotor inertia added to each wheel hinge (kg·m²)."""
+    steer_kp: float = 3000.0
+    """Steering servo stiffness (N·m/rad)."""
+    steer_kv: float = 150.0
+    """Steering servo damping (N·m·s/rad)."""
+    steer_damping: float = 5.0
+    """Steering hinge damping (N·m·s/rad)."""
+    steer_armature: float = 0.5
+    """Steering hinge armature (kg·m²)."""
+    steer_rate_max_rps: float = 0.8
+    """Largest bicycle steering-angle rate the controller may command (rad/s)."""
+    drive_torque_max_nm: float = 1500.0
+    """Largest drive or brake torque per rear wheel (N·m)."""
+    chase_back_m: float = 9.0
+    """Chase camera distance behind the reference point (m)."""
+    chase_up_m: float = 5.0
+    """Chase camera height above the wheel centres (m)."""
+    chase_pitch_deg: float = 25.0
+    """Chase camera pitch below the horizon (deg)."""
+
+
+@dataclass(frozen=True)
+class WorldConfig:
+    """How a scene becomes a MuJoCo world (extruded obstacles, boundary walls, ground)."""
+
+    obstacle_height_m: float = 2.0
+    """Height of extruded obstacles and circle cylinders (m)."""
+    wall_height_m: float = 1.0
+    """Height of the boundary walls (m)."""
+    wall_thickness_m: float = 0.5
+    """Thickness of the boundary walls, built outside the boundary (m)."""
+
+
+@dataclass(frozen=True)
+class SpeedProfileConfig:
+    """Speed profile of a gear segment: at rest at both ends, bounded speed, acceleration and steering rate."""
+
+    forward_speed_mps: float = 2.0
+    """Cruise speed in forward gear (m/s)."""
+    reverse_speed_mps: float = 1.5
+    """Cruise speed in reverse gear (m/s)."""
+    accel_mps2: float = 1.0
+    """Acceleration and deceleration bound along the path (m/s²)."""
+    lateral_accel_mps2: float = 1.0
+    """Lateral acceleration bound v²·|c| (m/s²)."""
+    steer_window_m: float = 1.0
+    """Path window over which a steering change is ramped in (m)."""
+    steer_rate_share: float = 0.6
+    """Share of the steering rate limit the profile plans the ramps with; the rest is left to feedback."""
+    creep_speed_mps: float = 0.15
+    """Least target speed until the end of a segment is reached (m)."""
+
+
+@dataclass(frozen=True)
+class LQRConfig:
+    """LQR on the kinematic path-error model with a steering lag (see `tracking.controllers.lqr.lqr_gain`)."""
+
+    q_lateral: float = 4.0
+    """Weight on the squared lateral error (1/m²)."""
+    q_heading: float = 1.0
+    """Weight on the squared heading error (1/rad²)."""
+    r_curvature: float = 1.0
+    """Weight on the squared curvature correction (m²)."""
+    steer_time_constant_s: float = 0.3
+    """First-order time constant τ of the steering response in the model (s)."""
+    speed_grid_mps: tuple[float, ...] = (0.1, 0.2, 0.35, 0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 3.0)
+    """Speeds |v| at which gains are computed per gear; gains in between are interpolated (m/s)."""
+
+
+@dataclass(frozen=True)
+class StanleyConfig:
+    """Stanley steering (Hoffmann et al. 2007) with curvature feed-forward."""
+
+    gain: float = 1.5
+    """Cross-track gain k of atan(k·e / (k_s + |v|)) (1/s)."""
+    softening_mps: float = 0.5
+    """Softening speed k_s (m/s)."""
+
+
+@dataclass(frozen=True)
+class PurePursuitConfig:
+    """Pure pursuit on the rear axle (Coulter 1992), look-ahead growing with speed."""
+
+    lookahead_min_m: float = 1.5
+    """Look-ahead distance at standstill (m)."""
+    lookahead_gain_s: float = 0.5
+    """Added look-ahead per unit speed (s)."""
+
+
+@dataclass(frozen=True)
+class LongitudinalConfig:
+    """PI speed control with acceleration feed-forward, output = drive force along the heading."""
+
+    kp_per_s: float = 3.0
+    """Proportional gain on the speed error, as an acceleration per m/s (1/s)."""
+    ki_per_s2: float = 0.5
+    """Integral gain on the speed error (1/s²)."""
+    integral_limit_mps2: float = 0.5
+    """Bound of the integral term, as an acceleration (m/s²)."""
+
+
+@dataclass(frozen=True)
+class ExecutorConfig:
+    """Closed-loop run: control rate, end conditions and logging."""
+
+    control_dt_s: float = 0.02
+    """Control period (s); the physics substeps = control_dt_s / timestep_s."""
+    reference_ds_m: float = 0.05
+    """Reference path sample spacing (m)."""
+    goal_position_tol_m: float = 0.3
+    """Executed parking success: final reference point within this distance of the target (m)."""
+    goal_heading_tol_deg: float = 10.0
+    """Executed parking success: final heading within this angle of the target (deg)."""
+    segment_end_tol_m: float = 0.05
+    """A gear segment ends when the remaining path is below this (m) and the vehicle is at rest."""
+    rest_speed_mps: float = 0.05
+    """Speed under which the vehicle counts as at rest (m/s)."""
+    steer_settle_rad: float = 0.05
+    """At the start of a segment the vehicle waits until the steering is within this of the reference (rad)."""
+    timeout_factor: float = 2.0
+    """Timeout = factor × profile duration + margin (s)."""
+    timeout_margin_s: float = 15.0
+    """Timeout margin (s)."""
+    stop_on_contact: bool = True
+    """End the run at the first body contact (reason 'contact')."""
+    curvature_tolerance: float = 0.05
+    """Relative excess of |steer_curvature| over κ_max accepted as sampling noise before 'steering_limit'."""
+    replan_period_s: float = 0.1
+    """Period of the replanning callback in replanning mode (s)."""
+    max_time_s: float = 120.0
+    """Timeout of a replanning run (s)."""
+    render_fps: float = 10.0
+    """Rendered frames per second of sim time when rendering."""
+    render_width: int = 320
+    """Rendered frame width (px)."""
+    render_height: int = 240
+    """Rendered frame height (px)."""
+    log_every: int = 1
+    """Log controller scalars and the footprint every this many control steps."""
+
+
+@dataclass(frozen=True)
+class TrackerConfig:
+    """Everything the executor uses; `from_dict` rejects unknown keys."""
+
+    vehicle: VehicleSpec = field(default_factory=VehicleSpec)
+    model: VehicleModelConfig = field(default_factory=VehicleModelConfig)
+    world: WorldConfig = field(default_factory=WorldConfig)
+    profile: SpeedProfileConfig = field(default_factory=SpeedProfileConfig)
+    lqr: LQRConfig = field(default_factory=LQRConfig)
+    stanley: StanleyConfig = field(default_factory=StanleyConfig)
+    pure_pursuit: PurePursuitConfig = field(default_factory=PurePursuitConfig)
+    longitudinal: LongitudinalConfig = field(default_factory=LongitudinalConfig)
+    executor: ExecutorConfig = field(default_factory=ExecutorConfig)
+
+    @classmethod
+    def from_dict(cls, data) -> "TrackerConfig":
+        """Build from a nested mapping; an unknown key is a ConfigError naming its field path."""
+        return config_from_dict(cls, data)
