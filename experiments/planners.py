@@ -1,0 +1,150 @@
+"""Classical, learned and hybrid planners on one benchmark's frozen test starts (paper §IV-B, §V-A Table
+``tab:twostage``, §V-F).
+
+``python -m experiments.planners --benchmark factorial|topology [--checkpoint PATH] [--methods ...]
+[--convention reference_point|footprint] [--limit N] [--out DIR]``
+
+Methods: Hybrid A*, NP-Guided A* (Hybrid A* guided by one NeuralParker rollout), the OMPL peer (RRT* in a
+Reeds–Shepp space, same time budget as Hybrid A*), NeuralParker (the checkpoint's deterministic policy) and the
+staged planner (region-goal Hybrid A* prefix to 10 m, then NeuralParker). Every frozen start (1,080 Factorial,
+720 Topology-Stress) is planned by every method. The table gives success on the full set; L, reversals and Δκ
+(eq:metrics; staged: without the hand-off curvature jump) as means over the common-success cohort of all methods
+run; plan time median and 90th percentile; expanded nodes (search methods: lattice expansions; OMPL: tree
+vertices) median. Writes ``records.csv``/``records.json`` (one row per episode and method), ``table.md`` and
+``config.json`` into the run folder.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from experiments.common import git_commit, run_folder, write_records
+from np_sim.benchmarks import frozen_starts, load_benchmark
+from np_sim.planners import HybridAStar
+
+METHODS = ("hybrid_astar", "np_guided_astar", "ompl_rrtstar", "neuralparker", "staged_astar_np")
+LABELS = {"hybrid_astar": "Hybrid A*", "np_guided_astar": "NP-Guided A*", "ompl_rrtstar": "OMPL RRT*",
+          "neuralparker": "NeuralParker", "staged_astar_np": "Hybrid A* → NP"}
+LEARNED = {"np_guided_astar", "neuralparker", "staged_astar_np"}
+DEFAULT_CHECKPOINT = Path("checkpoints/runs/factorial_np_seed0/best.pt")
+
+
+def build_planners(methods: list[str], checkpoint: Path | None, convention: str, ompl_seed: int) -> dict[str, Any]:
+    """One planner object per method name (learned ones share one policy)."""
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown:
+        raise ValueError(f"experiments.planners: unknown method(s) {unknown}; expected some of {list(METHODS)}")
+    search = HybridAStar(convention=convention)
+    planners: dict[str, Any] = {}
+    learned = None
+    if LEARNED & set(methods):
+        if checkpoint is None or not Path(checkpoint).exists():
+            raise FileNotFoundError(f"experiments.planners: methods {sorted(LEARNED & set(methods))} need a "
+                                    f"NeuralParker checkpoint; got {checkpoint} (pass --checkpoint PATH)")
+        from np_policy.planner import NeuralParkerPlanner
+        from np_policy.staged import NPGuidedAStar, StagedPlanner
+
+        learned = NeuralParkerPlanner.from_checkpoint(checkpoint)
+    for method in methods:
+        if method == "hybrid_astar":
+            planners[method] = search
+        elif method == "np_guided_astar":
+            planners[method] = NPGuidedAStar(learned, HybridAStar(search.config, convention))
+        elif method == "ompl_rrtstar":
+            from np_sim.planners.ompl_peer import OmplPeer, OmplPeerConfig
+
+            planners[method] = OmplPeer(OmplPeerConfig(time_budget_s=search.config.time_budget_s, seed=ompl_seed),
+                                        convention)
+        elif method == "neuralparker":
+            planners[method] = learned
+        else:
+            planners[method] = StagedPlanner(learned, HybridAStar(search.config, convention))
+    return planners
+
+
+def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | None = DEFAULT_CHECKPOINT,
+        convention: str = "reference_point", out: Path | None = None, limit: int | None = None, ompl_seed: int = 0,
+        progress: bool = True) -> dict[str, Any]:
+    """Plan every frozen start with every method; returns the records, the table text and the run folder."""
+    methods = list(METHODS if methods is None else methods)
+    planners = build_planners(methods, checkpoint, convention, ompl_seed)
+    scenes = load_benchmark(benchmark, "test")
+    starts = frozen_starts(benchmark)
+    folder = run_folder("planners", out)
+    episodes = [(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])][:limit]
+    records: list[dict[str, Any]] = []
+    for k, j in tqdm(episodes, desc=f"planners/{benchmark}", unit="ep", disable=not progress):
+        for method in methods:
+            plan = planners[method].plan(scenes[k], starts[k, j])
+            L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))
+            records.append({"scene": scenes[k].name, "start_id": j, "method": method, "seed": ompl_seed,
+                            "convention": convention, "success": int(plan.success), "reason": plan.reason, "L": L,
+                            "reversals": rev, "delta_kappa": dk, "plan_time_ms": 1e3 * plan.plan_time_s,
+                            "expanded_nodes": plan.expanded_nodes,
+                            "guide_time_ms": 1e3 * getattr(plan, "guide_time_s", float("nan"))})
+    table = format_table(records, methods)
+    write_records(folder, records)
+    (folder / "table.md").write_text(table + "\n")
+    (folder / "config.json").write_text(json.dumps({
+        "benchmark": benchmark, "methods": methods, "checkpoint": None if checkpoint is None else str(checkpoint),
+        "convention": convention, "episodes": len(episodes), "ompl_seed": ompl_seed,
+        "hybrid_astar": {k: v for k, v in vars(planners.get("hybrid_astar", HybridAStar()).config).items()
+                         if k != "vehicle"},
+        "git_commit": git_commit()}, indent=2, default=str))
+    return {"records": records, "table": table, "folder": folder}
+
+
+def format_table(records: list[dict[str, Any]], methods: list[str]) -> str:
+    """Markdown table: per method success (full set), cohort L / Rev. / Δκ, plan time median / p90, nodes."""
+    by_method = {m: [r for r in records if r["method"] == m] for m in methods}
+    solved = [{(r["scene"], r["start_id"]) for r in rows if r["success"]} for rows in by_method.values()]
+    cohort = set.intersection(*solved) if solved else set()
+    lines = [f"Common-success cohort: {len(cohort)} episodes.", "",
+             "| Method | Succ. | L (m) | Rev. | Δκ | plan time median / p90 (ms) | expanded nodes median |",
+             "|---|---|---|---|---|---|---|"]
+    for method, rows in by_method.items():
+        in_cohort = [r for r in rows if (r["scene"], r["start_id"]) in cohort]
+        metric = {key: np.mean([r[key] for r in in_cohort]) if in_cohort else float("nan")
+                  for key in ("L", "reversals", "delta_kappa")}
+        times = np.array([r["plan_time_ms"] for r in rows])
+        nodes = np.median([r["expanded_nodes"] for r in rows])
+        lines.append(f"| {LABELS[method]} | {np.mean([r['success'] for r in rows]):.3f} | {metric['L']:.2f} | "
+                     f"{metric['reversals']:.2f} | {metric['delta_kappa']:.2f} | {np.median(times):.2f} / "
+                     f"{np.percentile(times, 90):.2f} | {nodes:.0f} |")
+    if {"hybrid_astar", "np_guided_astar"} <= set(methods):
+        hybrid = np.median([r["plan_time_ms"] for r in by_method["hybrid_astar"]])
+        guided = by_method["np_guided_astar"]
+        total = np.median([r["plan_time_ms"] for r in guided])
+        search = np.median([r["plan_time_ms"] - r["guide_time_ms"] for r in guided])
+        lines += ["", f"NP-Guided A* / Hybrid A* median plan time: {total / hybrid:.2f} with the rollout, "
+                      f"{search / hybrid:.2f} search only (rollout median "
+                      f"{np.median([r['guide_time_ms'] for r in guided]):.2f} ms)."]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> dict[str, Any]:
+    parser = argparse.ArgumentParser(prog="python -m experiments.planners", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
+    parser.add_argument("--checkpoint", type=Path, default=DEFAULT_CHECKPOINT,
+                        help=f"NeuralParker checkpoint for the learned methods (default {DEFAULT_CHECKPOINT})")
+    parser.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS))
+    parser.add_argument("--convention", choices=["reference_point", "footprint"], default="reference_point")
+    parser.add_argument("--ompl-seed", type=int, default=0, help="OMPL's random seed")
+    parser.add_argument("--out", type=Path, help="run folder (default: results/planners/<timestamp>)")
+    parser.add_argument("--limit", type=int, help="only the first N frozen episodes (smoke runs)")
+    args = parser.parse_args(argv)
+    result = run(args.benchmark, args.methods, args.checkpoint, args.convention, args.out, args.limit, args.ompl_seed)
+    print(result["table"])
+    print(f"records: {result['folder'] / 'records.csv'}")
+    return result
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,87 @@
+"""experiments.planners: a tiny-budget smoke run of every method writes records and prints the table; the staged
+planner's metrics exclude the hand-off curvature jump; NP guidance and the staged hand-off work with the shipped
+policy whatever it does."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from experiments.planners import DEFAULT_CHECKPOINT, METHODS, main
+from np_policy.staged import NPGuidedAStar, StagedPlan, StagedPlanner
+from np_sim.collision import path_valid
+from np_sim.kinematics import arc_step
+from np_sim.metrics import plan_metrics
+from np_sim.plan import HermiteSegment
+from np_sim.scene import Scene
+
+needs_checkpoint = pytest.mark.skipif(not DEFAULT_CHECKPOINT.exists(), reason="no shipped NeuralParker checkpoint")
+
+
+@pytest.fixture(scope="module")
+def learned():
+    from np_policy.planner import NeuralParkerPlanner
+
+    return NeuralParkerPlanner.from_checkpoint(DEFAULT_CHECKPOINT)
+
+
+def _pocket_scene() -> Scene:
+    """The pocket of tests/np_sim/test_hybrid_astar.py: opening away from the start."""
+    return Scene.from_dict({
+        "boundary": [[0, 0], [40, 0], [40, 32], [0, 32]],
+        "obstacles": [{"polygon": [[17.0, 10.5], [17.4, 10.5], [17.4, 20.0], [17.0, 20.0]]},
+                      {"polygon": [[22.6, 10.5], [23.0, 10.5], [23.0, 20.0], [22.6, 20.0]]},
+                      {"polygon": [[17.4, 10.5], [22.6, 10.5], [22.6, 10.9], [17.4, 10.9]]}],
+        "target": [20.0, 12.5, math.pi / 2]})
+
+
+def test_staged_metrics_exclude_the_handoff_jump():
+    arcs = np.array([[0.68, 1.0], [0.0, 1.0], [-0.5, -2.0], [0.2, -1.0], [0.1, 3.0]])
+    hermite = HermiteSegment(points=np.zeros((2, 2)), forward=False, length=1.5, delta_kappa=0.4)
+    plan = StagedPlan(start=np.zeros(3), arcs=arcs, hermite=hermite, success=True, handoff_index=2)
+    L, rev, dk = plan.metrics()
+    L_all, rev_all, dk_all = plan_metrics(arcs, 1.5, 0.4, False)
+    assert L == pytest.approx(L_all)
+    assert rev == rev_all  # the gear change at the hand-off is a real reversal
+    assert dk == pytest.approx(dk_all - abs(-0.5 - 0.0))
+
+
+@needs_checkpoint
+def test_guided_search_succeeds_where_the_policy_may_not(learned):
+    scene, start = _pocket_scene(), np.array([20.0, 5.0, math.pi / 2])
+    guided = NPGuidedAStar(learned)
+    plan = guided.plan(scene, start)
+    assert plan.success, plan.reason
+    assert path_valid(scene, plan.sample(guided.search.config.check_spacing_m)[:, :3])
+    assert 0 < plan.guide_time_s < plan.plan_time_s
+
+
+@needs_checkpoint
+def test_staged_hands_over_within_the_radius(learned):
+    scene = _pocket_scene()
+    staged = StagedPlanner(learned, handoff_radius_m=10.0)
+    plan = staged.plan(scene, [3.0, 28.0, 0.0])
+    assert plan.handoff_index >= 1
+    handoff = np.asarray(plan.start, float)
+    for kappa, length in plan.arcs[: plan.handoff_index]:
+        handoff = arc_step(handoff, kappa, length)
+    assert math.hypot(*(handoff[:2] - scene.target[:2])) <= 10.0
+    assert plan.success or plan.reason.startswith("downstream: ")
+
+
+@needs_checkpoint
+def test_cli_smoke_writes_records(tmp_path: Path):
+    result = main(["--benchmark", "factorial", "--limit", "1", "--out", str(tmp_path), "--methods", *METHODS])
+    rows = list(csv.DictReader((tmp_path / "records.csv").open()))
+    assert [r["method"] for r in rows] == list(METHODS)
+    assert (tmp_path / "table.md").read_text().count("|") > 20
+    assert "NP-Guided A* / Hybrid A* median plan time" in result["table"]
+
+
+def test_learned_methods_need_a_checkpoint(tmp_path: Path):
+    with pytest.raises(FileNotFoundError, match="need a NeuralParker checkpoint"):
+        main(["--limit", "1", "--out", str(tmp_path), "--checkpoint", str(tmp_path / "none.pt")])
