@@ -11,3 +11,9 @@ obstacles and walls), `world` (scene → MuJoCo world), `reference` (plan → ge
 `controllers` (LQR, Stanley, pure pursuit, longitudinal), `executor` (closed loop), `validators`, `render`
 (off-screen frames), `rerun_log` (``.rrd`` files), `bench` (``python -m tracking.bench``).
 """
+
+import os
+
+# MuJoCo reads MUJOCO_GL once, when first imported: default to headless EGL (Mesa on CPU) before any module here
+# imports mujoco; a value the user set wins.
+os.environ.setdefault("MUJOCO_GL", "egl")

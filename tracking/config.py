@@ -178,8 +178,8 @@ class ExecutorConfig:
     """Rendered frame width (px)."""
     render_height: int = 240
     """Rendered frame height (px)."""
-    log_every: int = 1
-    """Log controller scalars and the footprint every this many control steps."""
+    log_every: int = 5
+    """Log the vehicle footprint to Rerun every this many control steps (scalars are logged every step)."""
 
 
 @dataclass(frozen=True)
@@ -187,14 +187,23 @@ class TrackerConfig:
     """Everything the executor uses; `from_dict` rejects unknown keys."""
 
     vehicle: VehicleSpec = field(default_factory=VehicleSpec)
+    """Footprint, wheelbase and curvature bound (the single source, SPEC §3)."""
     model: VehicleModelConfig = field(default_factory=VehicleModelConfig)
+    """MJCF physics beyond the spec."""
     world: WorldConfig = field(default_factory=WorldConfig)
+    """Scene extrusion."""
     profile: SpeedProfileConfig = field(default_factory=SpeedProfileConfig)
+    """Speed profile and steering feed-forward window."""
     lqr: LQRConfig = field(default_factory=LQRConfig)
+    """LQR lateral controller."""
     stanley: StanleyConfig = field(default_factory=StanleyConfig)
+    """Stanley lateral controller."""
     pure_pursuit: PurePursuitConfig = field(default_factory=PurePursuitConfig)
+    """Pure-pursuit lateral controller."""
     longitudinal: LongitudinalConfig = field(default_factory=LongitudinalConfig)
+    """Speed controller."""
     executor: ExecutorConfig = field(default_factory=ExecutorConfig)
+    """Closed-loop run settings."""
 
     @classmethod
     def from_dict(cls, data) -> "TrackerConfig":

@@ -5,8 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
+from tracking.kernels import nearest_piece
 from tracking.reference import Segment
 
 
@@ -36,25 +35,19 @@ def project(segment: Segment, pose, hint: int, back: int = 20, ahead: int = 80) 
     """Nearest point of the polyline pieces [hint − back, hint + ahead] of ``segment`` to the pose's position.
 
     Piece i from p_i to p_{i+1}: t = clip((p − p_i)·(p_{i+1} − p_i) / |p_{i+1} − p_i|², 0, 1); the nearest piece
-    minimises |p − p_i − t (p_{i+1} − p_i)|. The window keeps the match local where a path passes near itself.
+    minimises |p − p_i − t (p_{i+1} − p_i)| (`tracking.kernels.nearest_piece`). The window keeps the match local
+    where a path passes near itself.
     """
     xy = segment.xy
     n = len(xy)
-    i0, i1 = max(0, hint - back), min(n - 1, hint + ahead)
-    a = xy[i0:i1]
-    d = xy[i0 + 1:i1 + 1] - a
     px, py = float(pose[0]), float(pose[1])
-    rel = np.array([px, py]) - a
-    t = np.clip(np.einsum("ij,ij->i", rel, d) / np.maximum(np.einsum("ij,ij->i", d, d), 1e-18), 0.0, 1.0)
-    gap = rel - t[:, None] * d
-    k = int(np.argmin(np.einsum("ij,ij->i", gap, gap)))
-    i, tk = i0 + k, float(t[k])
+    i, tk = nearest_piece(xy, px, py, max(0, hint - back), min(n - 1, hint + ahead))
     s = segment.s[i] + tk * (segment.s[i + 1] - segment.s[i])
     th_ref = segment.theta[i] + tk * (segment.theta[i + 1] - segment.theta[i])
     c_ref = segment.steer_feedforward[i] + tk * (segment.steer_feedforward[i + 1] - segment.steer_feedforward[i])
     v_ref = segment.speed[i] + tk * (segment.speed[i + 1] - segment.speed[i])
     cx, cy = math.cos(th_ref), math.sin(th_ref)
-    gx, gy = px - (xy[i, 0] + tk * d[k, 0]), py - (xy[i, 1] + tk * d[k, 1])
+    gx, gy = px - (xy[i, 0] + tk * (xy[i + 1, 0] - xy[i, 0])), py - (xy[i, 1] + tk * (xy[i + 1, 1] - xy[i, 1]))
     remaining = segment.length - s
     if i == n - 2 and tk >= 1.0:
         remaining -= segment.gear * (gx * cx + gy * cy)

@@ -16,7 +16,7 @@ import numpy as np
 from np_sim.scene import CircleObstacle, Scene
 from tracking.config import TrackerConfig
 from tracking.geometry import convex_pieces, wall_pieces
-from tracking.mjcf import ackermann_angles, half_track_m, vehicle_xml
+from tracking.mjcf import half_track_m, vehicle_xml
 
 _OBSTACLE_BITS = 'contype="2" conaffinity="0"'
 """Collision bits of obstacles and walls (see models/mjcf/vehicle_template.xml)."""
@@ -138,11 +138,9 @@ class World:
 
     def apply(self, steer_curvature: float, wheel_torque_nm: float) -> None:
         """Set the two steering servos to the Ackermann angles of ``steer_curvature`` and both rear drive torques."""
-        left, right = ackermann_angles(steer_curvature, self.config.vehicle.wheelbase_m, self.half_track_m)
-        self.data.ctrl[0] = left
-        self.data.ctrl[1] = right
-        self.data.ctrl[2] = wheel_torque_nm
-        self.data.ctrl[3] = wheel_torque_nm
+        lc = self.config.vehicle.wheelbase_m * steer_curvature  # scalar form of ackermann_angles
+        ct = steer_curvature * self.half_track_m
+        self.data.ctrl[:] = (math.atan2(lc, 1.0 - ct), math.atan2(lc, 1.0 + ct), wheel_torque_nm, wheel_torque_nm)
 
     def steer_angle(self) -> float:
         """Bicycle steering angle atan(L·c) of the current front-wheel joint angles (mean of their curvatures)."""

@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import control
 import numpy as np
 
+from np_sim.errors import ConfigError
+from tracking.config import LQRConfig
 from tracking.controllers.base import LateralController, TrackingState
 
 
@@ -25,6 +29,17 @@ def lqr_gain(speed_mps: float, q_lateral: float, q_heading: float, r_curvature: 
     return np.asarray(K, dtype=float).reshape(3)
 
 
+@lru_cache(maxsize=16)
+def gain_table(config: LQRConfig) -> dict[int, np.ndarray]:
+    """{gear: (len(grid), 3) gains} on the speed grid of ``config`` (computed once per config)."""
+    grid = np.asarray(config.speed_grid_mps, dtype=float)
+    if len(grid) < 2 or np.any(grid <= 0) or np.any(np.diff(grid) <= 0):
+        raise ConfigError(f"LQRConfig.speed_grid_mps: expected at least two increasing positive speeds, got "
+                          f"{config.speed_grid_mps}")
+    return {g: np.array([lqr_gain(g * v, config.q_lateral, config.q_heading, config.r_curvature,
+                                  config.steer_time_constant_s) for v in grid]) for g in (1, -1)}
+
+
 class LQRController(LateralController):
     """c = c_ref − K(v, gear)·(e_y, e_θ, c_now − c_ref): LQR feedback plus curvature feed-forward (SPEC §8).
 
@@ -36,19 +51,17 @@ class LQRController(LateralController):
     name = "lqr"
 
     def __init__(self, config):
-        cfg = config.lqr
-        grid = np.asarray(cfg.speed_grid_mps, dtype=float)
-        if len(grid) < 1 or np.any(grid <= 0) or np.any(np.diff(grid) <= 0):
-            raise ValueError(f"LQRConfig.speed_grid_mps: expected increasing positive speeds, got {cfg.speed_grid_mps}")
-        self.grid = grid
-        self.gains = {g: np.array([lqr_gain(g * v, cfg.q_lateral, cfg.q_heading, cfg.r_curvature,
-                                             cfg.steer_time_constant_s) for v in grid]) for g in (1, -1)}
+        self.grid = np.asarray(config.lqr.speed_grid_mps, dtype=float)
+        self.gains = gain_table(config.lqr)
 
-    def gain(self, speed_mps: float, gear: int) -> np.ndarray:
-        """The scheduled gain K at |v| for the gear (+1 / −1)."""
-        table = self.gains[gear]
-        v = abs(speed_mps)
-        return np.array([np.interp(v, self.grid, table[:, j]) for j in range(table.shape[1])])
+    def gain(self, speed_mps: float, gear: int) -> tuple[float, float, float]:
+        """The scheduled gain K at |v| for the gear (+1 / −1), linear in |v| between grid speeds."""
+        table, grid = self.gains[gear], self.grid
+        v = min(max(abs(speed_mps), grid[0]), grid[-1])
+        j = min(int(np.searchsorted(grid, v, side="right")) - 1, len(grid) - 2)
+        w = (v - grid[j]) / (grid[j + 1] - grid[j])
+        k = table[j] + w * (table[j + 1] - table[j])
+        return float(k[0]), float(k[1]), float(k[2])
 
     def steer_curvature(self, state: TrackingState) -> float:
         p = state.projection

@@ -1,0 +1,130 @@
+"""Rerun logging of a closed-loop run: one ``.rrd`` per run, world frame in metres, timeline ``sim_time`` (s).
+
+Entity paths:
+
+* ``world/scene/boundary``, ``world/scene/obstacles``, ``world/scene/target`` (static): the scene and the target
+  footprint;
+* ``world/plan`` (static for the first plan, on ``sim_time`` for replans): the planned path per gear segment
+  (forward green, reverse red);
+* ``world/vehicle/footprint``, ``world/vehicle/reference_point`` (on ``sim_time``): the chassis rectangle;
+* ``world/executed`` (static, at the end): the executed reference-point trajectory;
+* ``world/contacts`` (on ``sim_time``): chassis contact points, labelled with the touched geom;
+* ``controller/<name>`` (scalars on ``sim_time``): cross_track_m, heading_error_rad, steer_curvature_cmd,
+  steer_curvature_ref, speed_mps, speed_target_mps;
+* ``camera/topdown``, ``camera/chase`` (JPEG frames on ``sim_time``) when rendering;
+* ``run/outcome`` (text): success, reason and the tracking figures.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import rerun as rr
+
+from np_sim.scene import CircleObstacle
+from tracking.config import TrackerConfig
+from tracking.observer import RunObserver
+
+_GEAR_COLORS = {1: (40, 170, 60), -1: (210, 50, 50)}
+"""Planned path colour per gear (forward green, reverse red)."""
+
+_SCALARS = ("cross_track_m", "heading_error_rad", "steer_curvature_cmd", "steer_curvature_ref", "speed_mps",
+            "speed_target_mps")
+"""Controller scalars, logged under ``controller/``."""
+
+
+def _closed(ring: np.ndarray) -> np.ndarray:
+    return np.vstack([ring, ring[:1]])
+
+
+class RerunObserver(RunObserver):
+    """Writes one run to ``path`` (frames too when ``render``); scalars are sent as columns at the end."""
+
+    def __init__(self, world, config: TrackerConfig, path: Path, render: bool):
+        self.config, self.vehicle = config, config.vehicle
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.rec = rr.RecordingStream("neuralparker_tracking")
+        self.rec.save(str(path))
+        self.every = max(1, config.executor.log_every)
+        self.steps = 0
+        self.times: list[float] = []
+        self.scalars: list[tuple[float, ...]] = []
+        self.trajectory: list[tuple[float, float]] = []
+        self.renderer = None
+        if render:
+            from tracking.render import RenderObserver
+
+            self.renderer = RenderObserver(world, config, sink=self._frame)
+
+    @property
+    def frames_rendered(self) -> int:
+        return 0 if self.renderer is None else self.renderer.frames_rendered
+
+    def _frame(self, t: float, camera: str, frame: np.ndarray) -> None:
+        self.rec.set_time("sim_time", duration=t)
+        self.rec.log(f"camera/{camera}", rr.Image(frame).compress(jpeg_quality=80))
+
+    def _log_plan(self, segments, static: bool) -> None:
+        self.rec.log("world/plan", rr.LineStrips2D([seg.xy for seg in segments],
+                                                   colors=[_GEAR_COLORS[seg.gear] for seg in segments],
+                                                   radii=0.04), static=static)
+
+    def on_start(self, world, plan, segments) -> None:
+        scene, rec = world.scene, self.rec
+        rec.log("world/scene/boundary", rr.LineStrips2D([_closed(scene.boundary)], colors=[(90, 90, 90)]), static=True)
+        rings = [o.ring(32) if isinstance(o, CircleObstacle) else o.vertices for o in scene.obstacles]
+        rec.log("world/scene/obstacles", rr.LineStrips2D([_closed(r) for r in rings], colors=[(60, 90, 200)],
+                                                         labels=[f"obstacle_{i}" for i in range(len(rings))]),
+                static=True)
+        rec.log("world/scene/target", rr.LineStrips2D([_closed(self.vehicle.footprint(scene.target))],
+                                                      colors=[(230, 180, 0)]), static=True)
+        self._log_plan(segments, static=True)
+        self._log_vehicle(0.0, world.pose())
+        if self.renderer is not None:
+            self.renderer.on_start(world, plan, segments)
+
+    def on_plan(self, t, plan, segments) -> None:
+        self.rec.set_time("sim_time", duration=t)
+        self._log_plan(segments, static=False)
+
+    def _log_vehicle(self, t: float, pose: np.ndarray) -> None:
+        self.rec.set_time("sim_time", duration=t)
+        self.rec.log("world/vehicle/footprint", rr.LineStrips2D([_closed(self.vehicle.footprint(pose))],
+                                                                colors=[(230, 120, 20)]))
+        self.rec.log("world/vehicle/reference_point", rr.Points2D([pose[:2]], radii=0.08))
+
+    def on_step(self, t, world, state, command, target_speed) -> None:
+        p = state.projection
+        self.times.append(t)
+        self.scalars.append((p.lateral_m, p.heading_rad, command, p.steer_curvature_ref, state.speed_mps,
+                             target_speed))
+        pose = world.pose()
+        self.trajectory.append((pose[0], pose[1]))
+        self.steps += 1
+        if self.steps % self.every == 0:
+            self._log_vehicle(t, pose)
+        if self.renderer is not None:
+            self.renderer.on_step(t, world, state, command, target_speed)
+
+    def on_end(self, record) -> None:
+        rec = self.rec
+        if self.times:
+            values = np.asarray(self.scalars)
+            index = [rr.TimeColumn("sim_time", duration=np.asarray(self.times))]
+            for j, name in enumerate(_SCALARS):
+                rec.send_columns(f"controller/{name}", indexes=index, columns=rr.Scalars.columns(scalars=values[:, j]))
+        if self.trajectory:
+            rec.log("world/executed", rr.LineStrips2D([np.asarray(self.trajectory)], colors=[(20, 20, 20)]),
+                    static=True)
+        for c in record.contacts:
+            rec.set_time("sim_time", duration=c.time_s)
+            rec.log("world/contacts", rr.Points2D([c.position], labels=[c.geom], colors=[(255, 0, 0)], radii=0.15))
+        rec.log("run/outcome", rr.TextLog(
+            f"success={record.success} reason={record.reason or '-'} {record.detail} "
+            f"cross_track_rms_m={record.cross_track_rms_m:.3f} final_error=({record.final_error[0]:.3f} m, "
+            f"{np.degrees(record.final_error[1]):.1f} deg)"), static=True)
+        if self.renderer is not None:
+            self.renderer.on_end(record)
+        rec.flush()
+        rec.disconnect()
