@@ -1,0 +1,140 @@
+"""Closed-loop tracking of planned paths on the benchmark frozen starts (SPEC §8, issue 7).
+
+``python -m experiments.track --benchmark factorial --planner hybrid_astar [--convention footprint]
+[--limit N] [--controller lqr|stanley|pure_pursuit|all] [--rrd-episodes N] [--no-render] [--out DIR]``
+
+Every frozen start of the benchmark's test scenes (1,080 Factorial, 720 Topology-Stress; ``--limit`` takes the
+first N in scene order) is planned once; the plan is checked by both validators (reference point and full
+footprint, `tracking.validators`) and executed on the MuJoCo vehicle by each controller (`tracking.executor`).
+The table gives, per controller: planning success, planned-path validity under both conventions, executed
+closed-loop success (no body contact, parked within 0.3 m / 10°) on all episodes and on the footprint-valid
+plans, tracking errors (mean over executed runs of the per-run cross-track RMS and max; final pose error of the
+executed successes) and the median real-time factor. Writes ``records.csv``/``records.json`` (one row per
+episode and controller), ``table.md``, ``config.json`` and the first ``--rrd-episodes`` runs as ``.rrd`` files.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from experiments.common import git_commit, run_folder, write_records
+from np_sim.benchmarks import frozen_starts, load_benchmark
+from tracking.controllers import CONTROLLERS
+from tracking.executor import execute
+from tracking.validators import validate_plan
+
+PLANNERS = ("hybrid_astar", "neuralparker")
+"""Planners this experiment can run."""
+
+
+def make_planner(name: str, convention: str, checkpoint: Path | None):
+    """The planner called ``name`` (imported here, so the experiment loads only what it runs)."""
+    if name == "hybrid_astar":
+        from np_sim.planners import HybridAStar
+
+        return HybridAStar(convention=convention)
+    if name == "neuralparker":
+        from np_policy.planner import NeuralParkerPlanner
+
+        if checkpoint is None:
+            raise ValueError("--planner neuralparker needs --checkpoint PATH (e.g. "
+                             "checkpoints/runs/factorial_np_seed0/best.pt)")
+        return NeuralParkerPlanner.from_checkpoint(checkpoint)
+    raise ValueError(f"--planner: expected one of {PLANNERS}, got {name!r}")
+
+
+def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controllers: tuple[str, ...] = ("lqr",),
+          convention: str = "footprint", checkpoint: Path | None = None, limit: int | None = None,
+          out: Path | None = None, rrd_episodes: int = 0, render: bool = True,
+          progress: bool = True) -> dict[str, Any]:
+    """Plan, validate and execute the frozen starts; returns the records, the table and the run folder."""
+    for c in controllers:
+        if c not in CONTROLLERS:
+            raise ValueError(f"--controller: expected one of {sorted(CONTROLLERS)} or 'all', got {c!r}")
+    scenes = load_benchmark(benchmark, "test")
+    starts = frozen_starts(benchmark)
+    folder = run_folder("track", out)
+    episodes = [(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])][:limit]
+    source = make_planner(planner, convention, checkpoint)
+    records: list[dict[str, Any]] = []
+    for n, (k, j) in enumerate(tqdm(episodes, desc=f"{planner} → MuJoCo", unit="ep", disable=not progress)):
+        scene = scenes[k]
+        plan = source.plan(scene, starts[k, j])
+        valid = validate_plan(scene, plan)
+        L, rev, _ = plan.metrics() if plan.success else (math.nan, -1, math.nan)
+        base = {"scene": scene.name, "start_id": j, "planner": planner, "convention": convention,
+                "plan_success": int(plan.success), "plan_reason": plan.reason, "plan_time_ms": 1e3 * plan.plan_time_s,
+                "L": L, "plan_reversals": rev, "ref_point_valid": int(valid["reference_point"]),
+                "footprint_valid": int(valid["footprint"])}
+        for controller in controllers:
+            rrd = folder / "rrd" / f"{scene.name}_{j:02d}_{controller}.rrd" if n < rrd_episodes else None
+            record = execute(scene, plan, controller=controller, render=render and rrd is not None, rerun_path=rrd)
+            records.append({**base, **record.to_row()})
+    table = format_table(records, controllers)
+    write_records(folder, records)
+    (folder / "table.md").write_text(table + "\n")
+    (folder / "config.json").write_text(json.dumps(
+        {"benchmark": benchmark, "planner": planner, "convention": convention, "checkpoint": str(checkpoint),
+         "controllers": list(controllers), "episodes": len(episodes), "rrd_episodes": rrd_episodes,
+         "render": render, "git_commit": git_commit()}, indent=2))
+    return {"records": records, "table": table, "folder": folder}
+
+
+def _mean(values) -> float:
+    v = np.asarray(list(values), float)
+    return float(np.nanmean(v)) if len(v) and not np.all(np.isnan(v)) else math.nan
+
+
+def format_table(records: list[dict[str, Any]], controllers) -> str:
+    """Markdown table, one row per controller (see the module docstring for the columns)."""
+    header = ("| Controller | Plan succ. | Ref.-point valid | Footprint valid | Executed succ. | Executed succ. "
+              "(footprint-valid plans) | Cross-track RMS (m) | Cross-track max (m) | Final error (m / °) | "
+              "Real-time factor |\n|---|---|---|---|---|---|---|---|---|---|")
+    rows = [header]
+    for c in controllers:
+        rs = [r for r in records if r["controller"] == c]
+        ran = [r for r in rs if r["plan_success"] and r["reason"] not in ("plan_failed", "empty_plan")]
+        fv = [r for r in rs if r["footprint_valid"]]
+        ok = [r for r in rs if r["success"]]
+        rows.append(
+            f"| {c} | {_mean(r['plan_success'] for r in rs):.3f} | {_mean(r['ref_point_valid'] for r in rs):.3f} | "
+            f"{_mean(r['footprint_valid'] for r in rs):.3f} | {_mean(r['success'] for r in rs):.3f} | "
+            f"{_mean(r['success'] for r in fv):.3f} ({len(fv)}) | "
+            f"{_mean(r['cross_track_rms_m'] for r in ran):.3f} | {_mean(r['cross_track_max_m'] for r in ran):.3f} | "
+            f"{_mean(r['final_position_error_m'] for r in ok):.3f} / {_mean(r['final_heading_error_deg'] for r in ok):.1f} | "
+            f"{np.nanmedian([r['realtime_factor'] for r in ran]) if ran else math.nan:.0f}× |")
+    n = len({(r['scene'], r['start_id']) for r in records})
+    return "\n".join(rows) + f"\n\n{n} episodes; errors over executed runs, final error over executed successes."
+
+
+def main(argv=None) -> dict[str, Any]:
+    parser = argparse.ArgumentParser(prog="python -m experiments.track", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
+    parser.add_argument("--planner", choices=PLANNERS, default="hybrid_astar")
+    parser.add_argument("--convention", choices=["reference_point", "footprint"], default="footprint",
+                        help="collision convention the planner plans under (default: footprint)")
+    parser.add_argument("--checkpoint", type=Path, default=None, help="NeuralParker checkpoint (--planner neuralparker)")
+    parser.add_argument("--controller", default="lqr", help="lqr, stanley, pure_pursuit or all")
+    parser.add_argument("--limit", type=int, default=None, help="only the first N frozen starts in scene order")
+    parser.add_argument("--rrd-episodes", type=int, default=2, help="write .rrd files for the first N episodes")
+    parser.add_argument("--no-render", action="store_true", help="no off-screen frames in the .rrd files")
+    parser.add_argument("--out", type=Path, default=None, help="run folder (default results/track/<timestamp>)")
+    args = parser.parse_args(argv)
+    controllers = tuple(CONTROLLERS) if args.controller == "all" else (args.controller,)
+    result = track(args.benchmark, args.planner, controllers, args.convention, args.checkpoint, args.limit, args.out,
+                   args.rrd_episodes, not args.no_render)
+    print(result["table"])
+    print(f"results in {result['folder']}")
+    return result
+
+
+if __name__ == "__main__":
+    main()
