@@ -1,10 +1,11 @@
 """Closed-loop tracking of planned paths on the benchmark frozen starts (SPEC §8, issue 7).
 
 ``python -m experiments.track --benchmark factorial --planner hybrid_astar [--convention footprint]
-[--limit N] [--controller lqr|stanley|pure_pursuit|all] [--rrd-episodes N] [--no-render] [--out DIR]``
+[--per-scene K] [--limit N] [--controller lqr|stanley|pure_pursuit|all] [--rrd-episodes N] [--no-render]
+[--out DIR]``
 
-Every frozen start of the benchmark's test scenes (1,080 Factorial, 720 Topology-Stress; ``--limit`` takes the
-first N in scene order) is planned once; the plan is checked by both validators (reference point and full
+Every frozen start of the benchmark's test scenes (1,080 Factorial, 720 Topology-Stress; ``--per-scene K`` keeps
+the first K of the 40 starts of every scene, ``--limit`` then the first N episodes in scene order) is planned once; the plan is checked by both validators (reference point and full
 footprint, `tracking.validators`) and executed on the MuJoCo vehicle by each controller (`tracking.executor`).
 The table gives, per controller: planning success, planned-path validity under both conventions, executed
 closed-loop success (no body contact, parked within 0.3 m / 10°) on all episodes and on the footprint-valid
@@ -52,6 +53,7 @@ def make_planner(name: str, convention: str, checkpoint: Path | None):
 
 def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controllers: tuple[str, ...] = ("lqr",),
           convention: str = "footprint", checkpoint: Path | None = None, limit: int | None = None,
+          per_scene: int | None = None,
           out: Path | None = None, rrd_episodes: int = 0, render: bool = True,
           progress: bool = True) -> dict[str, Any]:
     """Plan, validate and execute the frozen starts; returns the records, the table and the run folder."""
@@ -61,7 +63,8 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
     folder = run_folder("track", out)
-    episodes = [(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])][:limit]
+    per_scene = starts.shape[1] if per_scene is None else min(per_scene, starts.shape[1])
+    episodes = [(k, j) for k in range(len(scenes)) for j in range(per_scene)][:limit]
     source = make_planner(planner, convention, checkpoint)
     records: list[dict[str, Any]] = []
     for n, (k, j) in enumerate(tqdm(episodes, desc=f"{planner} → MuJoCo", unit="ep", disable=not progress)):
@@ -82,7 +85,8 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
     (folder / "table.md").write_text(table + "\n")
     (folder / "config.json").write_text(json.dumps(
         {"benchmark": benchmark, "planner": planner, "convention": convention, "checkpoint": str(checkpoint),
-         "controllers": list(controllers), "episodes": len(episodes), "rrd_episodes": rrd_episodes,
+         "controllers": list(controllers), "episodes": len(episodes), "per_scene": per_scene, "limit": limit,
+         "rrd_episodes": rrd_episodes,
          "render": render, "git_commit": git_commit()}, indent=2))
     return {"records": records, "table": table, "folder": folder}
 
@@ -123,14 +127,15 @@ def main(argv=None) -> dict[str, Any]:
                         help="collision convention the planner plans under (default: footprint)")
     parser.add_argument("--checkpoint", type=Path, default=None, help="NeuralParker checkpoint (--planner neuralparker)")
     parser.add_argument("--controller", default="lqr", help="lqr, stanley, pure_pursuit or all")
-    parser.add_argument("--limit", type=int, default=None, help="only the first N frozen starts in scene order")
+    parser.add_argument("--per-scene", type=int, default=None, help="only the first K frozen starts of each scene")
+    parser.add_argument("--limit", type=int, default=None, help="only the first N episodes in scene order")
     parser.add_argument("--rrd-episodes", type=int, default=2, help="write .rrd files for the first N episodes")
     parser.add_argument("--no-render", action="store_true", help="no off-screen frames in the .rrd files")
     parser.add_argument("--out", type=Path, default=None, help="run folder (default results/track/<timestamp>)")
     args = parser.parse_args(argv)
     controllers = tuple(CONTROLLERS) if args.controller == "all" else (args.controller,)
-    result = track(args.benchmark, args.planner, controllers, args.convention, args.checkpoint, args.limit, args.out,
-                   args.rrd_episodes, not args.no_render)
+    result = track(args.benchmark, args.planner, controllers, args.convention, args.checkpoint, args.limit,
+                   args.per_scene, args.out, args.rrd_episodes, not args.no_render)
     print(result["table"])
     print(f"results in {result['folder']}")
     return result
