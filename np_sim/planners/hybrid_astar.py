@@ -37,7 +37,7 @@ from np_sim.vehicle import VehicleSpec
 
 @dataclass(frozen=True)
 class HybridAStarConfig:
-    """Hybrid A* parameters (defaults tuned on the Factorial *train* scenes, never on the frozen test starts)."""
+    """Hybrid A* parameters; each default is documented below and none was fitted to the frozen test starts."""
 
     vehicle: VehicleSpec = field(default_factory=VehicleSpec)
     """Footprint (footprint convention) and curvature bound κ_max of the primitives and Reeds–Shepp paths."""
