@@ -33,11 +33,13 @@ from np_policy.ppo import RunningMeanStd, compute_targets, make_optimizer, ppo_u
 from np_sim.config import EnvConfig, config_from_dict
 from np_sim.curriculum import CurriculumSchedule, CurriculumStartSampler
 from np_sim.env import ParkingVectorEnv
+from np_sim.clips import training_pool
 from np_sim.errors import ConfigError
 from np_sim.scene import Scene
+from np_sim.site import SITE_OBSERVATION
 from np_sim.starts import UniformStartSampler
 
-BENCHMARKS = ("factorial", "topology", "examples")
+BENCHMARKS = ("factorial", "topology", "examples", "site")
 
 
 @dataclass(frozen=True)
@@ -45,14 +47,17 @@ class TrainConfig:
     """Everything a run depends on; written beside its checkpoints and stored inside them."""
 
     benchmark: str = "factorial"
-    """Training scenes: 'factorial', 'topology' (their train splits), 'examples' (the hand-made scenes), or the
-    path of a scene JSON file or of a folder of them (your own scenes)."""
+    """Training scenes: 'factorial', 'topology' (their train splits), 'examples' (the hand-made scenes), 'site'
+    (App. C resets from the 1,000 training clips; start with ``benchmark_defaults('site')``), or the path of a
+    scene JSON file or of a folder of them (your own scenes)."""
     seed: int = 0
     """Seed of torch, the envs' starts and the minibatch shuffling."""
     torch_threads: int = 0
     """torch intra-op threads (0 = all cores)."""
     curriculum_pool: int = 256
     """Start poses per scene in the geodesic curriculum pool."""
+    site_pool: int = 8192
+    """Site only: (scene, start) training resets drawn once from the training clips (``np_sim.clips.training_pool``)."""
     env: EnvConfig = field(default_factory=EnvConfig)
     ppo: PPOConfig = field(default_factory=PPOConfig)
     network: NetworkConfig = field(default_factory=NetworkConfig)
@@ -62,6 +67,10 @@ class TrainConfig:
         if self.benchmark not in BENCHMARKS and not _is_scene_path(self.benchmark):
             raise ConfigError(f"TrainConfig.benchmark: expected one of {list(BENCHMARKS)} or the path of a scene "
                               f"JSON file or folder, got {self.benchmark!r}")
+        if self.benchmark == "site" and self.curriculum.enabled:
+            raise ConfigError("TrainConfig.curriculum.enabled: the site trains from App. C resets (start and "
+                              "detections drawn together), so the geodesic curriculum must be off; start from "
+                              "benchmark_defaults('site')")
 
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict (JSON-safe)."""
@@ -71,6 +80,48 @@ class TrainConfig:
     def from_dict(cls, data: dict[str, Any]) -> "TrainConfig":
         """Inverse of ``to_dict``; an unknown key anywhere is a ConfigError naming its field path."""
         return config_from_dict(cls, data)
+
+
+def benchmark_defaults(benchmark: str) -> dict[str, Any]:
+    """The TrainConfig fields a benchmark changes from the paper's Factorial defaults, as a nested dict.
+
+    'site' is the paper's real-vehicle configuration (App. C): target-relative ego, the nearest ten detections as
+    five-vertex polygons and the site boundary (``np_sim.site.SITE_OBSERVATION``), no policy-level LiDAR, the
+    fixed nine-candidate Hermite connector, App. C resets instead of the curriculum.
+    """
+    if benchmark != "site":
+        return {"benchmark": benchmark}
+    return {"benchmark": "site", "env": {"observation": dataclasses.asdict(SITE_OBSERVATION),
+                                         "connector": {"mode": "fixed"}},
+            "curriculum": {"enabled": False}}
+
+
+def merge_config(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
+    """``base`` updated by ``override``, nested mappings merged key by key (neither argument is modified)."""
+    out = dict(base)
+    for key, value in override.items():
+        out[key] = merge_config(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) \
+            else value
+    return out
+
+
+class PairedStartSampler:
+    """Start k for scene k (the site's App. C resets); the curriculum interface with the fraction fixed at 1."""
+
+    fraction = 1.0
+
+    def __init__(self, starts: np.ndarray):
+        self.starts = np.asarray(starts, float)
+
+    def __call__(self, rng: np.random.Generator, scene_indices) -> np.ndarray:
+        return self.starts[np.atleast_1d(np.asarray(scene_indices, np.int64))].copy()
+
+    def set_progress(self, progress: float, schedule: CurriculumSchedule) -> None:
+        """No curriculum: every reset is full range."""
+
+    def set_fraction(self, fraction: float) -> None:
+        if fraction != 1.0:
+            raise CheckpointError(f"PairedStartSampler: a site run has curriculum fraction 1, snapshot has {fraction}")
 
 
 def _is_scene_path(benchmark: str) -> bool:
@@ -105,13 +156,20 @@ class Trainer:
         if config.torch_threads:
             torch.set_num_threads(config.torch_threads)
         torch.manual_seed(config.seed)
-        self.scenes = training_scenes(config.benchmark)
-        self.sampler = CurriculumStartSampler(self.scenes, fraction=config.curriculum.start_fraction,
-                                              pool_size=config.curriculum_pool, seed=config.seed)
+        if config.benchmark == "site":
+            self.scenes, starts = training_pool(config.site_pool, config.seed, observation=config.env.observation,
+                                                vehicle=config.env.vehicle, progress=True)
+            self.sampler = PairedStartSampler(starts)
+            select_sampler = PairedStartSampler(starts)
+        else:
+            self.scenes = training_scenes(config.benchmark)
+            self.sampler = CurriculumStartSampler(self.scenes, fraction=config.curriculum.start_fraction,
+                                                  pool_size=config.curriculum_pool, seed=config.seed)
+            select_sampler = UniformStartSampler(self.scenes, config.env.vehicle)
         self.envs = ParkingVectorEnv(self.scenes, ppo.num_train_envs, config.env, seed=config.seed,
                                      start_sampler=self.sampler)
         self.select_envs = ParkingVectorEnv(self.scenes, ppo.num_test_envs, config.env, seed=config.seed + 1,
-                                            start_sampler=UniformStartSampler(self.scenes, config.env.vehicle))
+                                            start_sampler=select_sampler)
         self.model = ActorCritic(config.env.observation, config.network)
         self.optimizer = make_optimizer(self.model, ppo)
         self.return_rms = RunningMeanStd()
@@ -325,12 +383,13 @@ def main(argv=None) -> list[dict[str, Any]]:
     parser.add_argument("--out", type=Path, help="run folder (default: results/train/<benchmark>_seed<N>)")
     parser.add_argument("--resume", action="store_true", help="continue from <out>/snapshot.pt")
     args = parser.parse_args(argv)
-    data: dict[str, Any] = {}
+    overrides: dict[str, Any] = {}
     if args.config is not None:
         try:
-            data = json.loads(args.config.read_text())
+            overrides = json.loads(args.config.read_text())
         except (OSError, json.JSONDecodeError) as exc:
             raise SystemExit(f"error: {args.config}: {exc}")
+    data = merge_config(benchmark_defaults(args.benchmark), overrides)
     data.update(benchmark=args.benchmark, seed=args.seed)
     config = TrainConfig.from_dict(data)
     out = args.out or Path("results/train") / f"{config.benchmark}_seed{config.seed}"

@@ -1152,6 +1152,28 @@ def sample_training_scene(rng: np.random.Generator, clips: Sequence[Clip], *,
     raise RuntimeError(f"sample_training_scene: no valid target and start in {max_tries} clip/frame draws")
 
 
+def training_pool(n: int, seed: int, *, observation=SITE_OBSERVATION, vehicle: VehicleSpec | None = None,
+                  clips: Sequence[Clip] | None = None, progress: bool = False) -> tuple[list[Scene], np.ndarray]:
+    """``n`` training resets of the site (paper App. C, `sample_training_scene`) drawn from ``clips`` (default: the
+    1,000 training clips) with ``numpy.random.default_rng(seed)``: the scenes and their (n, 3) start poses, paired
+    by index.
+
+    Training samples resets from this fixed pool (each env reset picks one pair uniformly), so a run is
+    reproducible and resumable without storing scenes; a larger pool is closer to a fresh draw per reset.
+    """
+    if n < 1:
+        raise ConfigError(f"training_pool: expected n >= 1 resets, got {n}")
+    from tqdm import tqdm
+
+    clips = load_clips("train") if clips is None else clips
+    rng = np.random.default_rng(seed)
+    scenes, starts = [], np.zeros((n, 3))
+    for i in tqdm(range(n), desc="site training resets", unit="reset", disable=not progress):
+        scene, starts[i] = sample_training_scene(rng, clips, observation=observation, vehicle=vehicle)
+        scenes.append(scene)
+    return scenes, starts
+
+
 # ---------------------------------------------------------------------- summary, figure, CLI
 
 

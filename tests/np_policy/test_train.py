@@ -74,3 +74,34 @@ def test_benchmark_must_name_a_benchmark_or_scene_files(tmp_path):
         TrainConfig(benchmark="factorail")
     with pytest.raises(ConfigError, match=r"holds no \*.json scene files"):
         training_scenes(str(tmp_path))
+
+
+def test_site_defaults_are_the_papers_real_vehicle_configuration():
+    from np_policy.train import benchmark_defaults, merge_config
+    from np_sim.errors import ConfigError
+    from np_sim.site import SITE_OBSERVATION
+
+    config = TrainConfig.from_dict(benchmark_defaults("site"))
+    assert config.env.observation == SITE_OBSERVATION and not config.env.observation.use_lidar
+    assert config.env.connector.mode == "fixed" and not config.curriculum.enabled
+    footprint = TrainConfig.from_dict(merge_config(benchmark_defaults("site"), {"env": {"collision": "footprint"}}))
+    assert footprint.env.collision == "footprint" and footprint.env.connector.mode == "fixed"
+    with pytest.raises(ConfigError, match="curriculum must be off"):
+        TrainConfig(benchmark="site")
+
+
+def test_site_training_pool_pairs_each_scene_with_a_valid_start():
+    from np_policy.train import PairedStartSampler
+    from np_sim.clips import load_clips, training_pool
+    from np_sim.collision import path_valid
+    from np_sim.site import SITE_OBSERVATION
+
+    clips = load_clips("eval")[:3]  # the mechanics only; training uses the training clips
+    scenes, starts = training_pool(4, seed=5, clips=clips)
+    again, starts_again = training_pool(4, seed=5, clips=clips)
+    assert [s.to_dict() for s in scenes] == [s.to_dict() for s in again] and (starts == starts_again).all()
+    for scene, start in zip(scenes, starts):
+        assert len(scene.obstacles) <= SITE_OBSERVATION.max_obstacles
+        assert path_valid(scene, start[None], convention="footprint")
+    sampler = PairedStartSampler(starts)
+    assert (sampler(None, [2, 0]) == starts[[2, 0]]).all()
