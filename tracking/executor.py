@@ -32,6 +32,7 @@ from tracking.config import TrackerConfig
 from tracking.controllers import SpeedController, SteeringLimiter, make_lateral
 from tracking.controllers.base import TrackingState
 from tracking.errors import TrackingError
+from tracking.mjcf import max_steer_rad
 from tracking.observer import Observers, RunObserver
 from tracking.projection import project
 from tracking.record import Contact, ExecutionRecord
@@ -66,7 +67,7 @@ class _Loop:
         self.lateral = make_lateral(controller, config)
         self.dt = ec.control_dt_s
         self.substeps = max(1, round(ec.control_dt_s / mc.timestep_s))
-        self.steering = SteeringLimiter(config.vehicle.wheelbase_m, config.vehicle.max_steer_rad,
+        self.steering = SteeringLimiter(config.vehicle.wheelbase_m, max_steer_rad(config.vehicle, mc),
                                         mc.steer_rate_max_rps, self.dt)
         self.speed_ctl = SpeedController(config.longitudinal, mc.wheel_radius_m, self.dt)
         self.t = 0.0

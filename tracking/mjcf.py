@@ -40,9 +40,21 @@ def ackermann_angles(steer_curvature, wheelbase_m: float, half_track: float):
     return (np.arctan2(wheelbase_m * c, 1.0 - c * half_track), np.arctan2(wheelbase_m * c, 1.0 + c * half_track))
 
 
+def steer_curvature_max(spec: VehicleSpec, model: VehicleModelConfig) -> float:
+    """Largest steering curvature of the mechanism: (1 + steer_margin)·κ_max (1/m)."""
+    if not model.steer_margin >= 0:
+        raise TrackingError(f"VehicleModelConfig.steer_margin: expected >= 0, got {model.steer_margin}")
+    return (1.0 + model.steer_margin) * spec.kappa_max
+
+
+def max_steer_rad(spec: VehicleSpec, model: VehicleModelConfig) -> float:
+    """Largest bicycle steering angle atan(c_max·L) (`VehicleSpec.max_steer_rad` when the margin is 0)."""
+    return math.atan(steer_curvature_max(spec, model) * spec.wheelbase_m)
+
+
 def steer_joint_max_rad(spec: VehicleSpec, model: VehicleModelConfig) -> float:
-    """Steering hinge range: the inner wheel's Ackermann angle at κ_max (the largest wheel angle needed)."""
-    left, _ = ackermann_angles(spec.kappa_max, spec.wheelbase_m, half_track_m(spec, model))
+    """Steering hinge range: the inner wheel's Ackermann angle at the largest steering curvature."""
+    left, _ = ackermann_angles(steer_curvature_max(spec, model), spec.wheelbase_m, half_track_m(spec, model))
     return float(left)
 
 

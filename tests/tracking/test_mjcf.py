@@ -9,7 +9,7 @@ import pytest
 from np_sim.vehicle import VehicleSpec
 from tracking.config import VehicleModelConfig
 from tracking.errors import TrackingError
-from tracking.mjcf import ackermann_angles, half_track_m, steer_joint_max_rad, vehicle_xml
+from tracking.mjcf import ackermann_angles, half_track_m, max_steer_rad, steer_joint_max_rad, vehicle_xml
 
 
 def _model(spec=None, model=None):
@@ -56,3 +56,11 @@ def test_bad_model_parameters_are_named():
         half_track_m(VehicleSpec(), VehicleModelConfig(wheel_inset_m=1.0))
     with pytest.raises(TrackingError, match="ground_clearance_m"):
         vehicle_xml(model=VehicleModelConfig(ground_clearance_m=0.9))
+
+
+def test_steering_margin_zero_is_exactly_the_spec_angle():
+    spec = VehicleSpec()
+    assert max_steer_rad(spec, VehicleModelConfig(steer_margin=0.0)) == pytest.approx(spec.max_steer_rad)
+    assert max_steer_rad(spec, VehicleModelConfig()) > spec.max_steer_rad
+    with pytest.raises(TrackingError, match="steer_margin"):
+        max_steer_rad(spec, VehicleModelConfig(steer_margin=-0.1))

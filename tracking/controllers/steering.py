@@ -8,7 +8,8 @@ import math
 class SteeringLimiter:
     """δ_k = δ_{k−1} + clip(clip(atan(c·L), ±δ_max) − δ_{k−1}, ±rate·dt); returns c = tan(δ_k)/L.
 
-    δ_max = `VehicleSpec.max_steer_rad` (atan(κ_max·L)); the rate bound is `VehicleModelConfig.steer_rate_max_rps`.
+    δ_max = `tracking.mjcf.max_steer_rad` (atan((1 + margin)·κ_max·L)); the rate bound is
+    `VehicleModelConfig.steer_rate_max_rps`.
     """
 
     def __init__(self, wheelbase_m: float, max_steer_rad: float, rate_rps: float, dt_s: float):
