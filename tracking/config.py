@@ -75,6 +75,11 @@ class WorldConfig:
     """Height of the boundary walls (m)."""
     wall_thickness_m: float = 0.5
     """Thickness of the boundary walls, built outside the boundary (m)."""
+    solid_obstacles: bool = True
+    """True: obstacles, movers and walls are MuJoCo collision geoms that push the vehicle back. False (detection
+    only): they do not collide; every control step the chassis's signed distance to each one near it is measured
+    (``mujoco.mj_geomDistance``) and an overlap is recorded as a body contact, so the vehicle drives on through
+    it (MuJoCo's margin/gap cannot do this: a penetrating contact is always active)."""
 
 
 @dataclass(frozen=True)

@@ -117,6 +117,8 @@ class _Loop:
             self.lateral_max = max(self.lateral_max, abs(proj.lateral_m))
             self.n_err += 1
         world.apply(command, self.speed_ctl.wheel_torque(target, accel, speed, world.effective_mass(steer_now)))
+        if world.movers:
+            world.move_objects(self.t)
         mujoco.mj_step(world.model, world.data, nstep=self.substeps)
         self.t += self.substeps * world.model.opt.timestep
         self._account(pose, speed)
@@ -153,7 +155,8 @@ def _segments(plan: Plan, config: TrackerConfig, start_speed_mps: float = 0.0) -
 
 def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = False,
             rerun_path: str | Path | None = None, *, replan: Replanner | None = None,
-            config: TrackerConfig | None = None, observer: RunObserver | None = None) -> ExecutionRecord:
+            config: TrackerConfig | None = None, observer: RunObserver | None = None,
+            world: World | None = None) -> ExecutionRecord:
     """Drive ``plan`` on the MuJoCo vehicle in ``scene`` from ``plan.start`` (see the module docstring).
 
     Parameters
@@ -174,13 +177,20 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
         Tracker configuration (default `TrackerConfig()`).
     observer
         Extra per-step observer (logging); `rerun_path`/`render` add their own.
+    world
+        A world already built from ``scene`` by `build_world` with this ``config`` (e.g. with moving objects);
+        the vehicle is placed at ``plan.start``. Default: built here from ``scene``. ``config`` defaults to the
+        world's.
 
     Returns
     -------
     ExecutionRecord
         Bad plans and starts give a record with a failure reason; bad arguments raise `TrackingError`.
     """
-    config = TrackerConfig() if config is None else config
+    if config is None:
+        config = TrackerConfig() if world is None else world.config
+    if world is not None and world.config != config:
+        raise TrackingError("execute: the world was built with another TrackerConfig than the one passed")
     if not isinstance(plan, Plan):
         raise TrackingError(f"execute: expected an np_sim.plan.Plan, got {type(plan).__name__}")
     start = np.asarray(plan.start, dtype=float)
@@ -194,7 +204,10 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
     if reason:
         return ExecutionRecord(success=False, reason=reason, detail=detail, controller=controller, final_pose=start,
                                final_error=_pose_error(start, scene.target))
-    world = build_world(scene, start, config)
+    if world is None:
+        world = build_world(scene, start, config)
+    else:
+        world.set_pose(start)
     observers = _observers(world, config, render, rerun_path, observer)
     loop = _Loop(world, controller, config, observers)
     loop.follow(segments, moving=False)

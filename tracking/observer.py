@@ -48,3 +48,22 @@ class Observers(RunObserver):
     def on_end(self, record) -> None:
         for p in self.parts:
             p.on_end(record)
+
+
+class TrajectoryRecorder(RunObserver):
+    """Records the executed reference-point trajectory: (t, x, y, θ) at the start and after every control step."""
+
+    def __init__(self):
+        self.rows: list[tuple[float, float, float, float]] = []
+
+    def on_start(self, world, plan, segments) -> None:
+        self.rows = [(0.0, *map(float, world.pose()))]
+
+    def on_step(self, t, world, state, command, target_speed) -> None:
+        self.rows.append((float(t), *map(float, world.pose())))
+
+    def array(self):
+        """(n, 4) float array t (s), x (m), y (m), θ (rad)."""
+        import numpy as np
+
+        return np.asarray(self.rows, dtype=float).reshape(-1, 4)

@@ -2,7 +2,9 @@
 
 Geom names say what a contact touched: ``obstacle_<i>`` (or ``obstacle_<i>_<k>`` for the k-th convex piece of a
 non-convex obstacle ``i`` in scene order), ``wall_<e>_<k>`` for boundary edge ``e`` (vertex e → e+1 as the scene
-gives it). Full-footprint contact = any contact of the vehicle's chassis box with one of these geoms.
+gives it), ``<mover name>`` (or ``<mover name>_<k>``) for a moving object (`tracking.movers.Mover`, a mocap body
+whose pose `World.move_objects` sets). Full-footprint contact = any contact of the vehicle's chassis box with one
+of these geoms. With ``WorldConfig.solid_obstacles=False`` these geoms only detect: contacts are listed, no force.
 """
 
 from __future__ import annotations
@@ -15,11 +17,24 @@ import numpy as np
 
 from np_sim.scene import CircleObstacle, Scene
 from tracking.config import TrackerConfig
+from tracking.errors import TrackingError
 from tracking.geometry import convex_pieces, wall_pieces
 from tracking.mjcf import half_track_m, vehicle_xml
+from tracking.movers import Mover
 
 _OBSTACLE_BITS = 'contype="2" conaffinity="0"'
 """Collision bits of obstacles and walls (see models/mjcf/vehicle_template.xml)."""
+_TOUCHABLE = ("obstacle_", "wall_", "mover_")
+"""Name prefixes of the geoms whose chassis contacts are body contacts."""
+
+
+_DETECTION_BITS = 'contype="0" conaffinity="0"'
+"""Detection-only obstacles and walls collide with nothing; `World.body_contacts` measures their overlaps."""
+
+
+def _obstacle_attributes(config: TrackerConfig) -> str:
+    """Collision attributes of obstacles, movers and walls: solid, or detection only (no collision)."""
+    return _OBSTACLE_BITS if config.world.solid_obstacles else _DETECTION_BITS
 
 
 def _prism_mesh(name: str, ring: np.ndarray, height: float) -> tuple[str, np.ndarray]:
@@ -33,23 +48,25 @@ def _prism_mesh(name: str, ring: np.ndarray, height: float) -> tuple[str, np.nda
     return f'<mesh name="{name}" vertex="{text}"/>', centre
 
 
-def scene_xml(scene: Scene, config: TrackerConfig) -> str:
-    """World MJCF (including ``vehicle.xml``) for ``scene``: geometry, lights, ground and a top-down camera."""
+def scene_xml(scene: Scene, config: TrackerConfig, movers: tuple[Mover, ...] = ()) -> str:
+    """World MJCF (including ``vehicle.xml``) for ``scene`` and ``movers`` (mocap bodies at their first pose):
+    geometry, lights, ground and a top-down camera."""
     wc = config.world
+    bits = _obstacle_attributes(config)
     assets, geoms = [], []
 
-    def prism(name: str, ring: np.ndarray, height: float, rgba: str) -> None:
+    def prism(name: str, ring: np.ndarray, height: float, rgba: str, into: list[str] = geoms) -> None:
         mesh, centre = _prism_mesh(name, ring, height)
         assets.append(mesh)
-        geoms.append(f'<geom name="{name}" type="mesh" mesh="{name}" pos="{centre[0]:.9g} {centre[1]:.9g} 0" '
-                     f'{_OBSTACLE_BITS} rgba="{rgba}"/>')
+        into.append(f'<geom name="{name}" type="mesh" mesh="{name}" pos="{centre[0]:.9g} {centre[1]:.9g} 0" '
+                    f'{bits} rgba="{rgba}"/>')
 
     for i, obstacle in enumerate(scene.obstacles):
         if isinstance(obstacle, CircleObstacle):
             cx, cy = obstacle.center
             geoms.append(f'<geom name="obstacle_{i}" type="cylinder" size="{obstacle.radius:.9g} '
                          f'{0.5 * wc.obstacle_height_m:.9g}" pos="{cx:.9g} {cy:.9g} {0.5 * wc.obstacle_height_m:.9g}" '
-                         f'{_OBSTACLE_BITS} rgba="0.3 0.4 0.8 1"/>')
+                         f'{bits} rgba="0.3 0.4 0.8 1"/>')
             continue
         pieces = convex_pieces(obstacle.vertices)
         for k, piece in enumerate(pieces):
@@ -59,6 +76,17 @@ def scene_xml(scene: Scene, config: TrackerConfig) -> str:
     for edge, piece in wall_pieces(scene.boundary, wc.wall_thickness_m):
         k = counts[edge] = counts.get(edge, -1) + 1
         prism(f"wall_{edge}_{k}", piece, wc.wall_height_m, "0.55 0.55 0.55 1")
+    for mover in movers:
+        if not mover.name.startswith("mover_"):
+            raise TrackingError(f"scene_xml: mover names must start with 'mover_', got {mover.name!r}")
+        x, y, yaw = mover.poses[0]
+        body: list[str] = []
+        pieces = convex_pieces(mover.outline)
+        for k, piece in enumerate(pieces):
+            prism(mover.name if len(pieces) == 1 else f"{mover.name}_{k}", piece, wc.obstacle_height_m,
+                  "0.8 0.3 0.6 1", body)
+        geoms.append(f'<body name="{mover.name}" mocap="true" pos="{x:.9g} {y:.9g} 0" '
+                     f'quat="{math.cos(0.5 * yaw):.9g} 0 0 {math.sin(0.5 * yaw):.9g}">{"".join(body)}</body>')
 
     lo, hi = scene.boundary.min(axis=0), scene.boundary.max(axis=0)
     centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo) + wc.wall_thickness_m + 1.0
@@ -108,6 +136,17 @@ class World:
     """Vehicle moment of inertia about the vertical axis through its centre of mass, I_z (kg·m²)."""
     steer_qpos: tuple[int, int]
     """qpos addresses of the left and right steering hinges."""
+    movers: tuple[Mover, ...] = ()
+    """Moving objects."""
+    mocap_ids: tuple[int, ...] = ()
+    """Mocap index of each mover's body."""
+
+    def move_objects(self, t: float) -> None:
+        """Place every mover's mocap body at its pose at sim time ``t`` (s)."""
+        for k, mover in zip(self.mocap_ids, self.movers):
+            x, y, yaw = mover.pose_at(t)
+            self.data.mocap_pos[k, :2] = (x, y)
+            self.data.mocap_quat[k] = (math.cos(0.5 * yaw), 0.0, 0.0, math.sin(0.5 * yaw))
 
     def pose(self) -> np.ndarray:
         """[x, y, θ] of the reference point (the free joint origin) and its yaw."""
@@ -151,7 +190,13 @@ class World:
         return math.atan(L * c)
 
     def body_contacts(self) -> list[tuple[str, np.ndarray]]:
-        """(geom name, world contact position) of every current chassis contact with an obstacle or wall."""
+        """(geom name, world contact position) of every current chassis contact with an obstacle, mover or wall.
+
+        Solid obstacles: MuJoCo's contacts of the chassis. Detection only: every touchable geom whose bounding
+        sphere meets the chassis's is measured with ``mj_geomDistance``; a negative signed distance (overlap) is a
+        contact at the midpoint of the penetration segment."""
+        if not self.config.world.solid_obstacles:
+            return self._overlaps()
         d = self.data
         if d.ncon == 0:
             return []
@@ -162,6 +207,21 @@ class World:
             other = int(pairs[h, 1] if pairs[h, 0] == self.chassis_geom else pairs[h, 0])
             out.append((self.geom_names.get(other, mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_GEOM, other)),
                         d.contact.pos[h].copy()))
+        return out
+
+
+    def _overlaps(self) -> list[tuple[str, np.ndarray]]:
+        m, d, chassis = self.model, self.data, self.chassis_geom
+        ids = np.fromiter(self.geom_names, dtype=int, count=len(self.geom_names))
+        if len(ids) == 0:
+            return []
+        reach = m.geom_rbound[ids] + m.geom_rbound[chassis]
+        near = ids[np.sum((d.geom_xpos[ids] - d.geom_xpos[chassis]) ** 2, axis=1) < reach * reach]
+        out = []
+        fromto = np.zeros(6)
+        for g in near:
+            if mujoco.mj_geomDistance(m, d, chassis, int(g), 0.0, fromto) < 0.0:
+                out.append((self.geom_names[int(g)], 0.5 * (fromto[:3] + fromto[3:])))
         return out
 
 
@@ -182,16 +242,17 @@ def _mass_properties(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[float,
     return mass, a, yaw
 
 
-def build_world(scene: Scene, start, config: TrackerConfig | None = None) -> World:
-    """Compile ``scene`` with the vehicle of ``config`` at rest at ``start`` (reference-point pose)."""
+def build_world(scene: Scene, start, config: TrackerConfig | None = None, movers: tuple[Mover, ...] = ()) -> World:
+    """Compile ``scene`` and ``movers`` with the vehicle of ``config`` at rest at ``start`` (reference-point pose)."""
     config = TrackerConfig() if config is None else config
+    movers = tuple(movers)
     assets = {"vehicle.xml": vehicle_xml(config.vehicle, config.model).encode()}
-    model = mujoco.MjModel.from_xml_string(scene_xml(scene, config), assets=assets)
+    model = mujoco.MjModel.from_xml_string(scene_xml(scene, config, movers), assets=assets)
     data = mujoco.MjData(model)
     names = {}
     for g in range(model.ngeom):
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or ""
-        if name.startswith(("obstacle_", "wall_")):
+        if name.startswith(_TOUCHABLE):
             names[g] = name
     mass, com_ahead, yaw_inertia = _mass_properties(model, data)
     world = World(model=model, data=data, scene=scene, config=config,
@@ -199,6 +260,8 @@ def build_world(scene: Scene, start, config: TrackerConfig | None = None) -> Wor
                   half_track_m=half_track_m(config.vehicle, config.model), mass_kg=mass, com_ahead_m=com_ahead,
                   yaw_inertia_kgm2=yaw_inertia,
                   steer_qpos=tuple(int(model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j)])
-                                   for j in ("steer_fl", "steer_fr")))
+                                   for j in ("steer_fl", "steer_fr")), movers=movers,
+                  mocap_ids=tuple(int(model.body_mocapid[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, m.name)])
+                                  for m in movers))
     world.set_pose(start)
     return world
