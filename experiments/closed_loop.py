@@ -1,0 +1,316 @@
+"""The real-vehicle study in closed loop: the 47 held-out site clips driven in MuJoCo by each planner (paper §V-F,
+Table ``tab:realworld``, App. C, Fig. ``fig:searchtime``; SPEC §8).
+
+``python -m experiments.closed_loop --clips [--clips-limit N] [--planners neuralparker np_guided_astar
+hybrid_astar] [--checkpoint PATH] [--no-render] [--render-clips K] [--out DIR] [--workers N] [--controller lqr]``
+
+For every evaluation clip and planner, `tracking.clip_run.run_clip` starts the MuJoCo vehicle at the clip's start
+pose in the clip's ground truth (static objects, moving pedestrians and carts, the site boundary as walls), plans
+from frame 0's detections, replans from the simulated pose and the current frame's detections when the followed
+plan stops being valid (once per 0.1 s frame at most), tracks the newest plan with the LQR controller and
+records both verdicts: **footprint success** (no chassis contact with a ground-truth object or wall, parked within
+0.3 m / 10°) and **reference-point success** (parked, the executed reference point never inside a ground-truth
+object nor outside the boundary). Planners: NeuralParker (the site checkpoint, paper-faithful reference-point
+training), "NeuralParker (footprint)" when ``checkpoints/site_np_footprint.pt`` exists, NP-Guided A* and Hybrid
+A* (both searching under the footprint convention).
+
+The table is the ``tab:realworld`` analogue — footprint success with reference-point success in parentheses, L
+and reversals executed on each method's own footprint successes, median plan time over all calls — plus
+closed-loop columns (failure reasons, final pose error and cross-track error). Writes into the run folder
+(default ``results/closed_loop/<timestamp>/``): ``records.csv`` / ``records.json`` (one row per clip × planner),
+``table.md``, ``config.json``, ``search_time.png`` and ``closed_loop.rrd`` (every run merged; the per-run files are
+in ``rrd/``; off-screen camera frames for the first ``--render-clips`` clips).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import shutil
+import subprocess
+import sys
+import time
+from collections import Counter
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from experiments.common import git_commit, run_folder, write_records
+
+PLANNERS = ("neuralparker", "np_guided_astar", "hybrid_astar")
+"""Planners of the table, in the paper's row order."""
+LABELS = {"neuralparker": "NeuralParker", "neuralparker_footprint": "NeuralParker (footprint)",
+          "np_guided_astar": "NP-Guided A*", "hybrid_astar": "Hybrid A*"}
+DEFAULT_CHECKPOINT = Path("checkpoints/site_np.pt")
+"""The shipped paper-faithful site checkpoint."""
+FOOTPRINT_CHECKPOINT = Path("checkpoints/site_np_footprint.pt")
+"""The shipped footprint-aware site checkpoint; its row appears when the file exists."""
+SEARCH_CONVENTION = "footprint"
+"""Collision convention of Hybrid A* and of NP-Guided A*'s search (the paper validates with the footprint)."""
+PAPER = {"neuralparker": "0.60 (0.93) | 7.0 | 1.20 | 0.37", "np_guided_astar": "0.72 | 7.7 | 1.17 | 4.24",
+         "hybrid_astar": "0.67 | 7.2 | 1.13 | 5.26"}
+"""Table tab:realworld (real vehicle, C++ plan times): succ. | L | Rev. | plan time (ms)."""
+
+
+def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Path | None) -> dict[str, Any]:
+    """One planner per name; NeuralParker and NP-Guided A* share the site policy of ``checkpoint``."""
+    unknown = [n for n in names if n not in PLANNERS and n != "neuralparker_footprint"]
+    if unknown:
+        raise ValueError(f"experiments.closed_loop: unknown planner(s) {unknown}; expected some of {list(PLANNERS)}")
+    from np_sim.planners import HybridAStar
+
+    planners: dict[str, Any] = {}
+    learned = None
+    if {"neuralparker", "np_guided_astar"} & set(names):
+        if not Path(checkpoint).exists():
+            raise FileNotFoundError(
+                f"experiments.closed_loop: the site NeuralParker checkpoint {checkpoint} does not exist; pass "
+                f"--checkpoint PATH (a site-configuration checkpoint, e.g. checkpoints/runs/site_np_seed0/best.pt) "
+                f"or leave neuralparker and np_guided_astar out of --planners")
+        from np_policy.planner import NeuralParkerPlanner
+
+        learned = NeuralParkerPlanner.from_checkpoint(checkpoint)
+    for name in names:
+        if name == "hybrid_astar":
+            planners[name] = HybridAStar(convention=SEARCH_CONVENTION)
+        elif name == "np_guided_astar":
+            from np_policy.staged import NPGuidedAStar
+
+            planners[name] = NPGuidedAStar(learned, HybridAStar(convention=SEARCH_CONVENTION))
+        elif name == "neuralparker":
+            planners[name] = learned
+        else:
+            from np_policy.planner import NeuralParkerPlanner
+
+            planners[name] = NeuralParkerPlanner.from_checkpoint(footprint_checkpoint)
+    return planners
+
+
+def clip_rows(clip, planners: dict[str, Any], controller: str, rrd_dir: Path | None, render: bool) -> list[dict]:
+    """Run one clip with every planner; one record row per planner."""
+    from tracking.clip_run import clip_world, object_of_geom, run_clip
+
+    ground = clip_world(clip)
+    rows = []
+    for name, planner in planners.items():
+        rrd = None if rrd_dir is None else rrd_dir / f"{clip.name}_{name}.rrd"
+        run = run_clip(clip, planner, controller, rerun_path=rrd, render=render)
+        rec, first = run.record, run.first_plan
+        times = np.array([c.plan_time_s for c in run.calls]) * 1e3
+        L, rev, _ = first.metrics() if first.success else (math.nan, -1, math.nan)
+        row = {"clip": clip.name, "difficulty": "+".join(clip.difficulty.reasons), "planner": name,
+               "footprint_success": int(run.footprint_success),
+               "reference_point_success": int(run.reference_point_success), "parked": int(run.parked),
+               "reference_point_detail": run.reference_point_detail,
+               "first_contact_object": object_of_geom(clip, ground, rec.contacts[0].geom) if rec.contacts else "",
+               "plan_calls": len(run.calls), "plan_failures": sum(not c.success for c in run.calls),
+               "plan_time_median_ms": float(np.median(times)), "plan_time_first_ms": float(times[0]),
+               "plan_time_max_ms": float(times.max()), "first_plan_success": int(first.success),
+               "first_plan_reason": first.reason, "first_plan_L_m": L, "first_plan_reversals": rev,
+               "first_plan_expanded_nodes": first.expanded_nodes,
+               "first_plan_footprint_valid": int(run.first_plan_valid["footprint"]),
+               "first_plan_reference_point_valid": int(run.first_plan_valid["reference_point"])}
+        row.update(rec.to_row())
+        rows.append(row)
+    return rows
+
+
+_WORKER: dict[str, Any] = {}
+"""Per-process state of the worker pool: clips and planners, built once per process."""
+
+
+def _init_worker(names, checkpoint, footprint_checkpoint) -> None:
+    from np_sim.clips import load_clips
+
+    _WORKER["clips"] = load_clips("eval")
+    _WORKER["planners"] = build_planners(names, checkpoint, footprint_checkpoint)
+
+
+def _work(args) -> list[dict]:
+    index, controller, rrd_dir, render = args
+    return clip_rows(_WORKER["clips"][index], _WORKER["planners"], controller, rrd_dir, render)
+
+
+def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT, clips_limit: int | None = None,
+        render_clips: int = 3, render: bool = True, out: Path | None = None, workers: int = 1,
+        controller: str = "lqr", rrd: bool = True, progress: bool = True) -> dict[str, Any]:
+    """Run the clips × planners; returns records, table text, folder and notes (see the module docstring)."""
+    from np_sim.clips import load_clips
+    from tracking.controllers import CONTROLLERS
+
+    if controller not in CONTROLLERS:
+        raise ValueError(f"--controller: expected one of {sorted(CONTROLLERS)}, got {controller!r}")
+    if workers < 1:
+        raise ValueError(f"--workers: expected >= 1, got {workers}")
+    names = list(PLANNERS if planners is None else planners)
+    notes = []
+    footprint = FOOTPRINT_CHECKPOINT if FOOTPRINT_CHECKPOINT.exists() else None
+    if "neuralparker" in names:
+        if footprint is not None:
+            names.insert(names.index("neuralparker") + 1, "neuralparker_footprint")
+        else:
+            notes.append(f"NeuralParker (footprint): {FOOTPRINT_CHECKPOINT} is missing, row left out.")
+    build_planners(names, checkpoint, footprint)  # fail fast on a missing checkpoint, before any work
+    clips = load_clips("eval")[:clips_limit]
+    folder = run_folder("closed_loop", out)
+    rrd_dir = folder / "rrd" if rrd else None
+    jobs = [(k, controller, rrd_dir, render and k < render_clips) for k in range(len(clips))]
+    wall0 = time.perf_counter()
+    bar = tqdm(total=len(clips) * len(names), desc="clips × planners in MuJoCo", unit="run", disable=not progress)
+    results: list[list[dict]] = []
+    if workers == 1:
+        _init_worker(names, checkpoint, footprint)
+        for job in jobs:
+            results.append(_work(job))
+            bar.update(len(names))
+    else:
+        with ProcessPoolExecutor(workers, initializer=_init_worker,
+                                 initargs=(names, checkpoint, footprint)) as pool:
+            for rows in pool.map(_work, jobs):  # in clip order, so the records do not depend on the workers
+                results.append(rows)
+                bar.update(len(names))
+    bar.close()
+    wall = time.perf_counter() - wall0
+    records = [row for rows in results for row in rows]
+    table = format_table(records, names) + "\n\n" + "\n".join(notes)
+    write_records(folder, records)
+    (folder / "table.md").write_text(table.strip() + "\n")
+    figure = search_time_figure(records, folder / "search_time.png")
+    merged = merge_rrd(rrd_dir, folder / "closed_loop.rrd") if rrd_dir is not None else None
+    (folder / "config.json").write_text(json.dumps({
+        "planners": names, "checkpoint": str(checkpoint), "footprint_checkpoint": None if footprint is None
+        else str(footprint), "search_convention": SEARCH_CONVENTION, "clips": len(clips), "controller": controller,
+        "render_clips": render_clips if render else 0, "workers": workers, "wall_time_s": wall,
+        "clip_run": _clip_run_config(), "git_commit": git_commit()}, indent=2, default=str))
+    return {"records": records, "table": table, "folder": folder, "figure": figure, "rrd": merged,
+            "wall_time_s": wall}
+
+
+def _clip_run_config() -> dict:
+    """The clip-run settings as written into config.json."""
+    from dataclasses import asdict
+
+    from tracking.clip_run import ClipRunConfig
+
+    config = asdict(ClipRunConfig())
+    return {k: v for k, v in config.items() if k != "tracker"} | {
+        "world": config["tracker"]["world"], "executor": config["tracker"]["executor"]}
+
+
+def _fmt(value: float, digits: int = 2) -> str:
+    return "–" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
+
+
+def _mean(values) -> float:
+    v = np.asarray(list(values), float)
+    return float(np.mean(v)) if len(v) else math.nan
+
+
+def format_table(records: list[dict], names: list[str]) -> str:
+    """Markdown: the tab:realworld analogue, the closed-loop columns and the paper's real-vehicle figures."""
+    n = len({r["clip"] for r in records})
+    lines = [f"Closed loop on {n} held-out site clips (MuJoCo, LQR tracker, replanning from the simulated pose).", "",
+             "| Method | Succ. footprint (ref. point) | L (m) | Rev. | Plan time median (ms) | first-frame plan "
+             "time median (ms) | Paper: Succ. / L / Rev. / ms |", "|---|---|---|---|---|---|---|"]
+    for name in names:
+        rows = [r for r in records if r["planner"] == name]
+        ok = [r for r in rows if r["footprint_success"]]
+        lines.append(
+            f"| {LABELS[name]} | {_mean(r['footprint_success'] for r in rows):.2f} "
+            f"({_mean(r['reference_point_success'] for r in rows):.2f}) | "
+            f"{_fmt(_mean(r['path_length_m'] for r in ok), 1)} | {_fmt(_mean(r['reversals'] for r in ok))} | "
+            f"{_fmt(float(np.median([r['plan_time_median_ms'] for r in rows])))} | "
+            f"{_fmt(float(np.median([r['plan_time_first_ms'] for r in rows])))} | "
+            f"{PAPER.get(name, '–').replace(' | ', ' / ')} |")
+    lines += ["", "| Method | Failure reasons | Parked | Final error, footprint successes (m / °) | Cross-track RMS / "
+              "max (m) | Planner calls / failed per run | Sim / wall time per run (s) |", "|---|---|---|---|---|---|---|"]
+    for name in names:
+        rows = [r for r in records if r["planner"] == name]
+        ok = [r for r in rows if r["footprint_success"]]
+        ran = [r for r in rows if r["sim_time_s"] > 0]
+        reasons = Counter(r["reason"] for r in rows if r["reason"])
+        lines.append(
+            f"| {LABELS[name]} | {', '.join(f'{k} {v}' for k, v in reasons.most_common()) or '–'} | "
+            f"{_mean(r['parked'] for r in rows):.2f} | {_fmt(_mean(r['final_position_error_m'] for r in ok), 3)} / "
+            f"{_fmt(_mean(r['final_heading_error_deg'] for r in ok), 1)} | "
+            f"{_fmt(_mean(r['cross_track_rms_m'] for r in ran), 3)} / {_fmt(_mean(r['cross_track_max_m'] for r in ran), 3)} | "
+            f"{_mean(r['plan_calls'] for r in rows):.1f} / {_mean(r['plan_failures'] for r in rows):.1f} | "
+            f"{_mean(r['sim_time_s'] for r in rows):.1f} / {_mean(r['wall_time_s'] for r in rows):.2f} |")
+    lines += ["", "Succ.: executed footprint success (no chassis contact with a ground-truth object or wall, parked "
+              "within 0.3 m / 10°) on all clips; in parentheses the reference-point success (parked, the executed "
+              "reference point never inside a ground-truth object or outside the boundary). L and Rev. are executed, "
+              "on each method's own footprint successes. Plan times are Python on this machine (paper: C++ on the "
+              "vehicle). Paper column: Table tab:realworld (real-vehicle perception, paths validated in simulation)."]
+    return "\n".join(lines)
+
+
+def search_time_figure(records: list[dict], path: Path) -> Path | None:
+    """Fig. fig:searchtime analogue: clips ranked by Hybrid A*'s first-frame plan time, both searches' times."""
+    planners = {r["planner"] for r in records}
+    if not {"hybrid_astar", "np_guided_astar"} <= planners:
+        return None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    hybrid = {r["clip"]: r["plan_time_first_ms"] for r in records if r["planner"] == "hybrid_astar"}
+    guided = {r["clip"]: r["plan_time_first_ms"] for r in records if r["planner"] == "np_guided_astar"}
+    order = sorted(hybrid, key=lambda c: (hybrid[c], c))
+    fig, ax = plt.subplots(figsize=(7.0, 3.2))
+    rank = np.arange(1, len(order) + 1)
+    ax.plot(rank, [hybrid[c] for c in order], "o-", ms=3, label="Hybrid A*")
+    ax.plot(rank, [guided[c] for c in order], "s-", ms=3, label="NP-Guided A* (rollout + search)")
+    ax.set_yscale("log")
+    ax.set_xlabel("clip rank by Hybrid A* search time")
+    ax.set_ylabel("first-frame plan time (ms)")
+    ax.set_title("Search time per clip, from the clip start at frame 0", fontsize=9)
+    ax.legend(fontsize=8)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+def merge_rrd(rrd_dir: Path, out: Path) -> Path:
+    """Merge every run's ``.rrd`` into one file with ``rerun rrd merge``."""
+    exe = Path(sys.executable).parent / "rerun"
+    exe = str(exe) if exe.exists() else shutil.which("rerun")
+    if exe is None:
+        raise FileNotFoundError("merge_rrd: the 'rerun' command is missing; install rerun-sdk into the venv")
+    files = sorted(str(p) for p in rrd_dir.glob("*.rrd"))
+    subprocess.run([exe, "rrd", "merge", "-o", str(out), *files], check=True, capture_output=True)
+    return out
+
+
+def main(argv=None) -> dict[str, Any]:
+    parser = argparse.ArgumentParser(prog="python -m experiments.closed_loop", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--clips", action="store_true", required=True, help="run the 47 held-out site clips")
+    parser.add_argument("--clips-limit", type=int, default=None, help="only the first N clips")
+    parser.add_argument("--planners", nargs="+", choices=PLANNERS, default=list(PLANNERS))
+    parser.add_argument("--checkpoint", type=Path, default=DEFAULT_CHECKPOINT,
+                        help=f"site NeuralParker checkpoint (default {DEFAULT_CHECKPOINT})")
+    parser.add_argument("--no-render", action="store_true", help="no off-screen camera frames in the .rrd")
+    parser.add_argument("--render-clips", type=int, default=3, help="clips with camera frames (default 3)")
+    parser.add_argument("--out", type=Path, default=None, help="run folder (default results/closed_loop/<time>)")
+    parser.add_argument("--workers", type=int, default=1, help="parallel processes (default 1)")
+    parser.add_argument("--controller", default="lqr", help="lateral controller (lqr, stanley, pure_pursuit)")
+    args = parser.parse_args(argv)
+    result = run(args.planners, args.checkpoint, args.clips_limit, args.render_clips, not args.no_render, args.out,
+                 args.workers, args.controller)
+    folder = result["folder"]
+    print(result["table"])
+    print(f"\nwall time {result['wall_time_s']:.0f} s; results in {folder}/: records.csv, records.json, table.md, "
+          f"config.json" + (", search_time.png" if result["figure"] else ""))
+    print(f"Rerun recording of every run: {result['rrd']}  (open it with: rerun {result['rrd']})")
+    return result
+
+
+if __name__ == "__main__":
+    main()

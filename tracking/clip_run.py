@@ -1,0 +1,304 @@
+"""One site clip in closed loop (SPEC §8 "Closed loop on a clip"; paper §V-F, App. C, Table ``tab:realworld``).
+
+The MuJoCo world is the clip's ground truth: the site boundary as walls, the static objects extruded, the movers
+(pedestrians, pushed carts) as mocap bodies following their recorded poses (`tracking.movers`). The vehicle starts
+at rest at the clip's start pose with the planner's plan from frame 0. Every ``replan_period_s`` (one clip frame,
+0.1 s) of sim time the vehicle takes that frame's detections (`Clip.frame_scene(frame, pose=pose)`: the ten
+detections nearest to the vehicle, held over missed frames; frame = ⌊t / 0.1 s⌉ clamped to the clip's last frame)
+and, by ``ClipRunConfig.replan``:
+
+* ``"on_invalid"`` (default): the planner replans from the simulated reference-point pose when the rest of the
+  followed plan is no longer valid in this frame's scene (under the planner's own collision convention) or the
+  vehicle is more than ``deviation_m`` off it; the tracker follows the newest successful plan;
+* ``"every_frame"``: the planner replans at every frame and the tracker always switches to the newest plan. With
+  a search planner this never settles (successive plans from a moving vehicle pick different manoeuvres: Hybrid
+  A* on eval-1000001 switched plans 529 times and timed out after 60 s), hence the default.
+
+After a failed call the planner is called again no sooner than ``retry_period_s`` (0.5 s) later (a failing
+rollout or search is the slowest call there is). A planner that raises on a start it considers in collision
+counts as a failed call. Once the vehicle stands
+within the parking tolerance of the target it stops replanning (a parked vehicle does not start a new
+manoeuvre). Obstacles, movers and walls are detection only (`WorldConfig.solid_obstacles=False`) and the run does
+not stop at a touch, so one run gives both verdicts:
+
+* **footprint success** — the executor's success: no chassis contact with any ground-truth object or wall during
+  the run and parked within 0.3 m / 10° of the target;
+* **reference-point success** — parked within the tolerance and the executed reference point never inside a
+  ground-truth object at that instant (movers at their interpolated pose) nor outside the site boundary, checked
+  at every control step (50 Hz) of the recorded trajectory.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import shapely
+
+from np_sim.clips import Clip
+from np_sim.collision import path_valid
+from np_sim.errors import ConfigError
+from np_sim.plan import Plan
+from np_sim.scene import PolygonObstacle, Scene
+from tracking.config import ExecutorConfig, TrackerConfig, WorldConfig
+from tracking.executor import execute
+from tracking.movers import Mover, poses_at
+from tracking.observer import Observers, RunObserver, TrajectoryRecorder
+from tracking.record import ExecutionRecord
+from tracking.validators import validate_plan
+from tracking.world import build_world
+
+
+def clip_tracker_config() -> TrackerConfig:
+    """The tracker of the clip runs: detection-only obstacles, no stop at a contact, 60 s of sim time at most."""
+    return dataclasses.replace(TrackerConfig(), world=WorldConfig(solid_obstacles=False),
+                               executor=ExecutorConfig(stop_on_contact=False, max_time_s=60.0))
+
+
+REPLAN_MODES = ("on_invalid", "every_frame")
+"""When a clip run calls the planner (module docstring)."""
+
+
+@dataclass(frozen=True)
+class ClipRunConfig:
+    """Settings of a clip run."""
+
+    tracker: TrackerConfig = field(default_factory=clip_tracker_config)
+    """Tracker, world and executor settings (default `clip_tracker_config`)."""
+    replan: str = "on_invalid"
+    """``"on_invalid"`` or ``"every_frame"`` (module docstring)."""
+    deviation_m: float = 0.5
+    """``on_invalid``: replan when the reference point is farther than this from the followed plan (m)."""
+    check_ds_m: float = 0.1
+    """Spacing of the followed plan's samples checked against each frame (m)."""
+    retry_period_s: float = 0.5
+    """Least sim time between a failed planner call and the next call (s)."""
+
+    def __post_init__(self) -> None:
+        if self.replan not in REPLAN_MODES:
+            raise ValueError(f"ClipRunConfig.replan: expected one of {REPLAN_MODES}, got {self.replan!r}")
+        if not (self.deviation_m > 0 and self.check_ds_m > 0):
+            raise ValueError(f"ClipRunConfig: deviation_m and check_ds_m must be > 0, got {self.deviation_m!r}, "
+                             f"{self.check_ds_m!r}")
+
+
+class _FollowedPath:
+    """The followed plan's samples and the vehicle's progress along them (nearest sample, searched forward)."""
+
+    WINDOW = 40
+    """Samples searched ahead of the last progress index (4 m at 0.1 m: far more than 0.1 s of driving)."""
+
+    def __init__(self, plan: Plan, ds_m: float):
+        self.poses = plan.sample(ds_m)[:, :3]
+        self.index = 0
+
+    def advance(self, pose: np.ndarray) -> float:
+        """Move the progress index to the nearest sample ahead; the distance to it (m)."""
+        window = self.poses[self.index: self.index + self.WINDOW]
+        d = np.hypot(window[:, 0] - pose[0], window[:, 1] - pose[1])
+        k = int(np.argmin(d))
+        self.index += k
+        return float(d[k])
+
+    def remaining(self) -> np.ndarray:
+        """Poses from the progress index to the end."""
+        return self.poses[self.index:]
+
+
+def planner_convention(planner) -> str:
+    """The collision convention ``planner`` plans under: NeuralParker's env config, a search's ``convention``,
+    NP-Guided A*'s search."""
+    for owner in (planner, getattr(planner, "search", None)):
+        if owner is not None and isinstance(getattr(owner, "convention", None), str):
+            return owner.convention
+    config = getattr(planner, "config", None)
+    if config is not None and hasattr(config, "env"):
+        return config.env.collision
+    raise ValueError(f"planner_convention: cannot tell the collision convention of {type(planner).__name__}")
+
+
+@dataclass(frozen=True)
+class ClipWorld:
+    """A clip's ground truth as the executor's inputs."""
+
+    scene: Scene
+    """Site boundary, the static objects (scene obstacle i = object ``static_ids[i]``) and the clip target."""
+    static_ids: tuple[int, ...]
+    """Object id of each static scene obstacle."""
+    movers: tuple[Mover, ...]
+    """The moving objects, named ``mover_<object id>``."""
+
+
+def clip_world(clip: Clip) -> ClipWorld:
+    """Static ground-truth scene and movers of ``clip``."""
+    static = [obj for obj in clip.objects if not obj.moving]
+    scene = clip.site.scene(clip.target, [PolygonObstacle(obj.polygon(0)) for obj in static],
+                            name=f"{clip.name}/ground_truth", tags={"clip": clip.name, "source": "ground_truth"})
+    movers = tuple(Mover(f"mover_{obj.id}", obj.outline, obj.poses, clip.frame_dt_s)
+                   for obj in clip.objects if obj.moving)
+    return ClipWorld(scene=scene, static_ids=tuple(obj.id for obj in static), movers=movers)
+
+
+def object_of_geom(clip: Clip, world: ClipWorld, geom: str) -> str:
+    """'<kind> <id>' of the clip object a touchable geom belongs to, 'boundary' for a wall."""
+    if geom.startswith("wall_"):
+        return "boundary"
+    index = int(geom.split("_")[1])
+    object_id = index if geom.startswith("mover_") else world.static_ids[index]
+    return f"{clip.objects[object_id].kind} {object_id}"
+
+
+def reference_point_violation(clip: Clip, world: ClipWorld, trajectory: np.ndarray) -> str:
+    """'' when every executed reference point (rows t, x, y, θ) is inside the site boundary and outside every
+    ground-truth object at its time; otherwise what the first violation was."""
+    t, x, y = trajectory[:, 0], trajectory[:, 1], trajectory[:, 2]
+    bad = np.zeros(len(t), bool)
+    what = np.full(len(t), "", dtype=object)
+    outside = ~shapely.contains_xy(shapely.Polygon(world.scene.boundary), x, y)
+    bad |= outside
+    what[outside] = "outside the site boundary"
+    for index, obstacle in enumerate(world.scene.obstacles):
+        inside = shapely.contains_xy(shapely.Polygon(obstacle.vertices), x, y) & ~bad
+        bad |= inside
+        what[inside] = f"inside {object_of_geom(clip, world, f'obstacle_{index}')}"
+    for mover in world.movers:
+        pose = poses_at(mover.poses, mover.frame_dt_s, t)
+        c, s = np.cos(pose[:, 2]), np.sin(pose[:, 2])
+        dx, dy = x - pose[:, 0], y - pose[:, 1]  # into the object frame: R(−yaw)·(p − position)
+        inside = shapely.contains_xy(shapely.Polygon(mover.outline), c * dx + s * dy, -s * dx + c * dy) & ~bad
+        bad |= inside
+        what[inside] = f"inside {object_of_geom(clip, world, mover.name)}"
+    if not bad.any():
+        return ""
+    first = int(np.argmax(bad))
+    return f"reference point {what[first]} at t = {t[first]:.2f} s"
+
+
+@dataclass
+class PlanCall:
+    """One planner call of a clip run."""
+
+    time_s: float
+    """Sim time of the call (s)."""
+    frame: int
+    """Clip frame whose detections were used."""
+    success: bool
+    """The planner returned a successful plan."""
+    plan_time_s: float
+    """The plan's own planning time (s)."""
+
+
+@dataclass
+class ClipRun:
+    """Outcome of one clip × planner closed-loop run."""
+
+    record: ExecutionRecord
+    """The executor's record (footprint success = ``record.success``)."""
+    first_plan: Plan
+    """The plan from the clip start at frame 0."""
+    calls: list[PlanCall] = field(default_factory=list)
+    """Every planner call, the first one included."""
+    trajectory: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
+    """(n, 4) executed t, x, y, θ at every control step."""
+    parked: bool = False
+    """The run ended (not a timeout or a plan failure) with the vehicle within the parking tolerance."""
+    reference_point_detail: str = ""
+    """'' or the first reference-point violation (`reference_point_violation`)."""
+    first_plan_valid: dict[str, bool] = field(default_factory=dict)
+    """Both planned-path validators on the first plan against the frame-0 ground truth (movers included)."""
+
+    @property
+    def footprint_success(self) -> bool:
+        """No body contact during the run and parked."""
+        return bool(self.record.success)
+
+    @property
+    def reference_point_success(self) -> bool:
+        """Parked and the executed reference point never inside a ground-truth object or outside the boundary."""
+        return self.parked and not self.reference_point_detail
+
+
+def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunConfig | None = None,
+             rerun_path: str | Path | None = None, render: bool = False) -> ClipRun:
+    """Drive ``clip`` in closed loop with ``planner`` replanning once per frame (module docstring).
+
+    Parameters
+    ----------
+    clip
+        A site clip (`np_sim.clips.load_clips`).
+    planner
+        Anything with ``plan(scene, start) -> Plan`` (NeuralParker, NP-Guided A*, Hybrid A*).
+    controller
+        Lateral controller of the tracker.
+    config
+        Replanning and tracker settings; default `ClipRunConfig()` (replan on an invalid plan, detection-only
+        obstacles, no stop at a contact).
+    rerun_path, render
+        Write the run to this ``.rrd`` (`tracking.clip_log.ClipRerunObserver`), with off-screen frames if
+        ``render``.
+    """
+    config = ClipRunConfig() if config is None else config
+    tracker = config.tracker
+    ground = clip_world(clip)
+    dt = clip.frame_dt_s
+    convention = planner_convention(planner)
+    tol_m, tol_rad = tracker.executor.goal_position_tol_m, math.radians(tracker.executor.goal_heading_tol_deg)
+    calls: list[PlanCall] = []
+    log = None
+    followed: list[_FollowedPath] = []
+    wait_until = [0.0]
+
+    def plan_at(pose: np.ndarray, t: float, frame: int, scene: Scene) -> Plan:
+        try:
+            plan = planner.plan(scene, pose)
+        except ConfigError as error:  # NeuralParker refuses a start in collision under its convention
+            plan = Plan(start=np.asarray(pose, float), reason=f"refused: {error}")
+        calls.append(PlanCall(time_s=t, frame=frame, success=bool(plan.success), plan_time_s=plan.plan_time_s))
+        if not plan.success:
+            wait_until[0] = t + config.retry_period_s
+        if log is not None:
+            log.log_detections(t, scene)
+        if plan.success:
+            followed[:] = [_FollowedPath(plan, config.check_ds_m)]
+        return plan
+
+    def replan(pose: np.ndarray, t: float) -> Plan | None:
+        if (math.hypot(pose[0] - clip.target[0], pose[1] - clip.target[1]) <= tol_m
+                and abs(math.remainder(pose[2] - clip.target[2], 2.0 * math.pi)) <= tol_rad):
+            return None  # parked: no new manoeuvre
+        if t < wait_until[0] - 1e-9:
+            return None  # shortly after a failed call
+        frame = min(int(round(t / dt)), clip.n_frames - 1)
+        scene = clip.frame_scene(frame, pose=pose)
+        if config.replan == "on_invalid" and followed:
+            path = followed[0]
+            if path.advance(pose) <= config.deviation_m and path_valid(scene, path.remaining(), convention,
+                                                                       tracker.vehicle):
+                return None  # the followed plan still holds
+        return plan_at(pose, t, frame, scene)
+
+    start = np.asarray(clip.start, float)
+    world = build_world(ground.scene, start, tracker, ground.movers)
+    recorder = TrajectoryRecorder()
+    parts: list[RunObserver] = [recorder]
+    if rerun_path is not None:
+        from tracking.clip_log import ClipRerunObserver
+
+        log = ClipRerunObserver(world, tracker, Path(rerun_path), render, clip_name=clip.name)
+        parts.append(log)
+    first = plan_at(start, 0.0, 0, clip.frame_scene(0, pose=start))
+    gt0 = clip.frame_scene(0, ground_truth=True)
+    record = execute(ground.scene, first, controller, replan=replan, config=tracker, observer=Observers(parts),
+                     world=world)
+    if rerun_path is not None and record.reason in ("plan_failed", "empty_plan", "steering_limit",
+                                                    "start_in_collision"):
+        log.finish_unrun(record)  # the executor returned before the loop started: no hooks were called
+    err_m, err_rad = record.final_error
+    parked = record.reason in ("", "contact") and err_m <= tol_m and err_rad <= tol_rad
+    trajectory = recorder.array() if recorder.rows else np.array([[0.0, *start]])
+    return ClipRun(record=record, first_plan=first, calls=calls, trajectory=trajectory, parked=parked,
+                   reference_point_detail=reference_point_violation(clip, ground, trajectory) if parked else "",
+                   first_plan_valid=validate_plan(gt0, first))
