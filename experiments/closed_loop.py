@@ -1,7 +1,7 @@
 """The real-vehicle study in closed loop: the 47 held-out site clips driven in MuJoCo by each planner (paper §V-F,
 Table ``tab:realworld``, App. C, Fig. ``fig:searchtime``; SPEC §8).
 
-``python -m experiments.closed_loop --clips [--clips-limit N] [--planners neuralparker np_guided_astar
+``python -m experiments.closed_loop --clips [--clips-limit N | --clip-names NAME ...] [--planners neuralparker np_guided_astar
 hybrid_astar] [--checkpoint PATH] [--no-render] [--render-clips K] [--out DIR] [--workers N] [--controller lqr]``
 
 For every evaluation clip and planner, `tracking.clip_run.run_clip` starts the MuJoCo vehicle at the clip's start
@@ -137,7 +137,8 @@ def _work(args) -> list[dict]:
 
 def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT, clips_limit: int | None = None,
         render_clips: int = 3, render: bool = True, out: Path | None = None, workers: int = 1,
-        controller: str = "lqr", rrd: bool = True, progress: bool = True) -> dict[str, Any]:
+        controller: str = "lqr", rrd: bool = True, progress: bool = True,
+        clip_names: list[str] | None = None) -> dict[str, Any]:
     """Run the clips × planners; returns records, table text, folder and notes (see the module docstring)."""
     from np_sim.clips import load_clips
     from tracking.controllers import CONTROLLERS
@@ -155,12 +156,20 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
         else:
             notes.append(f"NeuralParker (footprint): {FOOTPRINT_CHECKPOINT} is missing, row left out.")
     build_planners(names, checkpoint, footprint)  # fail fast on a missing checkpoint, before any work
-    clips = load_clips("eval")[:clips_limit]
+    clips = load_clips("eval")
+    if clip_names:
+        known = {c.name: k for k, c in enumerate(clips)}
+        missing = [n for n in clip_names if n not in known]
+        if missing:
+            raise ValueError(f"--clip-names: {missing} are not evaluation clips (eval-1000001 … {clips[-1].name})")
+        indices = [known[n] for n in clip_names]
+    else:
+        indices = list(range(len(clips)))[:clips_limit]
     folder = run_folder("closed_loop", out)
     rrd_dir = folder / "rrd" if rrd else None
-    jobs = [(k, controller, rrd_dir, render and k < render_clips) for k in range(len(clips))]
+    jobs = [(k, controller, rrd_dir, render and n < render_clips) for n, k in enumerate(indices)]
     wall0 = time.perf_counter()
-    bar = tqdm(total=len(clips) * len(names), desc="clips × planners in MuJoCo", unit="run", disable=not progress)
+    bar = tqdm(total=len(jobs) * len(names), desc="clips × planners in MuJoCo", unit="run", disable=not progress)
     results: list[list[dict]] = []
     if workers == 1:
         _init_worker(names, checkpoint, footprint)
@@ -183,7 +192,7 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
     merged = merge_rrd(rrd_dir, folder / "closed_loop.rrd") if rrd_dir is not None else None
     (folder / "config.json").write_text(json.dumps({
         "planners": names, "checkpoint": str(checkpoint), "footprint_checkpoint": None if footprint is None
-        else str(footprint), "search_convention": SEARCH_CONVENTION, "clips": len(clips), "controller": controller,
+        else str(footprint), "search_convention": SEARCH_CONVENTION, "clips": [clips[k].name for k in indices], "controller": controller,
         "render_clips": render_clips if render else 0, "workers": workers, "wall_time_s": wall,
         "clip_run": _clip_run_config(), "git_commit": git_commit()}, indent=2, default=str))
     return {"records": records, "table": table, "folder": folder, "figure": figure, "rrd": merged,
@@ -293,6 +302,7 @@ def main(argv=None) -> dict[str, Any]:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--clips", action="store_true", required=True, help="run the 47 held-out site clips")
     parser.add_argument("--clips-limit", type=int, default=None, help="only the first N clips")
+    parser.add_argument("--clip-names", nargs="+", default=None, help="only these clips (e.g. eval-1000016)")
     parser.add_argument("--planners", nargs="+", choices=PLANNERS, default=list(PLANNERS))
     parser.add_argument("--checkpoint", type=Path, default=DEFAULT_CHECKPOINT,
                         help=f"site NeuralParker checkpoint (default {DEFAULT_CHECKPOINT})")
@@ -303,7 +313,7 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--controller", default="lqr", help="lateral controller (lqr, stanley, pure_pursuit)")
     args = parser.parse_args(argv)
     result = run(args.planners, args.checkpoint, args.clips_limit, args.render_clips, not args.no_render, args.out,
-                 args.workers, args.controller)
+                 args.workers, args.controller, clip_names=args.clip_names)
     folder = result["folder"]
     print(result["table"])
     print(f"\nwall time {result['wall_time_s']:.0f} s; results in {folder}/: records.csv, records.json, table.md, "

@@ -1,0 +1,55 @@
+"""experiments.closed_loop: two site clips end to end, headless, with Hybrid A* and an untrained site policy."""
+
+import csv
+import json
+
+import pytest
+import torch
+
+from experiments.closed_loop import main
+from np_policy.checkpoint import save_checkpoint
+from np_policy.network import ActorCritic
+from np_policy.train import TrainConfig, benchmark_defaults
+
+KNOWN_FEASIBLE = "eval-1000016"
+"""Hybrid A* (footprint convention) parks this clip without a touch in closed loop (averse start, one reversal)."""
+
+
+@pytest.fixture
+def site_checkpoint(tmp_path):
+    """A randomly initialised (seeded) policy of the paper's site configuration, as a checkpoint file."""
+    torch.manual_seed(0)
+    config = TrainConfig.from_dict(benchmark_defaults("site"))
+    model = ActorCritic(config.env.observation, config.network)
+    return save_checkpoint(tmp_path / "site_random.pt", {"model": model.state_dict(), "config": config.to_dict()})
+
+
+def test_two_clips_run_end_to_end_and_the_known_feasible_clip_parks(tmp_path, site_checkpoint):
+    out = tmp_path / "run"
+    result = main(["--clips", "--clip-names", KNOWN_FEASIBLE, "eval-1000009", "--planners", "neuralparker",
+                   "hybrid_astar", "--checkpoint", str(site_checkpoint), "--no-render", "--out", str(out)])
+    rows = list(csv.DictReader((out / "records.csv").open()))
+    assert [(r["clip"], r["planner"]) for r in rows] == [(KNOWN_FEASIBLE, "neuralparker"),
+                                                          (KNOWN_FEASIBLE, "hybrid_astar"),
+                                                          ("eval-1000009", "neuralparker"),
+                                                          ("eval-1000009", "hybrid_astar")]
+    for key in ("footprint_success", "reference_point_success", "reason", "plan_time_median_ms", "plan_time_first_ms",
+                "plan_calls", "plan_failures", "path_length_m", "reversals", "final_position_error_m",
+                "cross_track_rms_m", "sim_time_s", "wall_time_s", "first_contact_object"):
+        assert key in rows[0]
+    hybrid = rows[1]
+    assert hybrid["footprint_success"] == "1" and hybrid["reference_point_success"] == "1", hybrid["detail"]
+    assert float(hybrid["final_position_error_m"]) < 0.3 and int(hybrid["reversals"]) >= 1
+    for r in rows:  # a footprint success is a reference-point success; a failure names its reason
+        assert r["reference_point_success"] >= r["footprint_success"]
+        assert (r["footprint_success"] == "1") == (r["reason"] == "")
+    assert "| Hybrid A* |" in result["table"] and "| NeuralParker |" in result["table"]
+    assert json.loads((out / "records.json").read_text())[1]["planner"] == "hybrid_astar"
+    assert (out / "table.md").exists() and (out / "closed_loop.rrd").stat().st_size > 0
+    assert len(list((out / "rrd").glob("*.rrd"))) == 4
+    assert json.loads((out / "config.json").read_text())["clips"] == [KNOWN_FEASIBLE, "eval-1000009"]
+
+
+def test_a_missing_checkpoint_is_a_clear_error(tmp_path):
+    with pytest.raises(FileNotFoundError, match="site NeuralParker checkpoint"):
+        main(["--clips", "--clips-limit", "1", "--checkpoint", str(tmp_path / "none.pt"), "--out", str(tmp_path)])
