@@ -100,8 +100,13 @@ def test_heading_change_is_minus_sign_kappa_times_abs_l_kappa_whatever_the_gear(
     assert abs(wrap_angle(arc_step(pose, kappa, -length)[2] - end[2])) <= 1e-9
 
 
+# |κ| ≥ 1e-4 or 0: below, the float form r·(1 − cos α) of the oracle itself cancels (error ≈ ε/|κ|); tiny κ is
+# pinned by test_arc_step_matches_eq_arc_in_high_precision
+closed_form_kappas = kappas.filter(lambda k: k == 0.0 or abs(k) >= 1e-4)
+
+
 @PROPS
-@given(poses, kappas, lengths)
+@given(poses, closed_form_kappas, lengths)
 def test_arc_matches_closed_form(pose, kappa, length):
     """eq:arc evaluated here in plain Python, term by term."""
     x, y, th = pose
