@@ -90,15 +90,17 @@ def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Pat
     return planners
 
 
-def clip_rows(clip, planners: dict[str, Any], controller: str, rrd_dir: Path | None, render: bool) -> list[dict]:
+def clip_rows(clip, planners: dict[str, Any], controller: str, rrd_dir: Path | None, render: bool,
+              replan: str = "on_invalid") -> list[dict]:
     """Run one clip with every planner; one record row per planner."""
-    from tracking.clip_run import clip_world, object_of_geom, run_clip
+    from tracking.clip_run import ClipRunConfig, clip_world, object_of_geom, run_clip
 
     ground = clip_world(clip)
     rows = []
     for name, planner in planners.items():
         rrd = None if rrd_dir is None else rrd_dir / f"{clip.name}_{name}.rrd"
-        run = run_clip(clip, planner, controller, rerun_path=rrd, render=render)
+        run = run_clip(clip, planner, controller, config=ClipRunConfig(replan=replan), rerun_path=rrd,
+                       render=render)
         rec, first = run.record, run.first_plan
         times = np.array([c.plan_time_s for c in run.calls]) * 1e3
         L, rev, _ = first.metrics() if first.success else (math.nan, -1, math.nan)
@@ -131,14 +133,14 @@ def _init_worker(names, checkpoint, footprint_checkpoint) -> None:
 
 
 def _work(args) -> list[dict]:
-    index, controller, rrd_dir, render = args
-    return clip_rows(_WORKER["clips"][index], _WORKER["planners"], controller, rrd_dir, render)
+    index, controller, rrd_dir, render, replan = args
+    return clip_rows(_WORKER["clips"][index], _WORKER["planners"], controller, rrd_dir, render, replan)
 
 
 def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT, clips_limit: int | None = None,
         render_clips: int = 3, render: bool = True, out: Path | None = None, workers: int = 1,
         controller: str = "lqr", rrd: bool = True, progress: bool = True,
-        clip_names: list[str] | None = None) -> dict[str, Any]:
+        clip_names: list[str] | None = None, replan: str = "on_invalid") -> dict[str, Any]:
     """Run the clips × planners; returns records, table text, folder and notes (see the module docstring)."""
     from np_sim.clips import load_clips
     from tracking.controllers import CONTROLLERS
@@ -167,7 +169,7 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
         indices = list(range(len(clips)))[:clips_limit]
     folder = run_folder("closed_loop", out)
     rrd_dir = folder / "rrd" if rrd else None
-    jobs = [(k, controller, rrd_dir, render and n < render_clips) for n, k in enumerate(indices)]
+    jobs = [(k, controller, rrd_dir, render and n < render_clips, replan) for n, k in enumerate(indices)]
     wall0 = time.perf_counter()
     bar = tqdm(total=len(jobs) * len(names), desc="clips × planners in MuJoCo", unit="run", disable=not progress)
     results: list[list[dict]] = []
@@ -194,18 +196,18 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
         "planners": names, "checkpoint": str(checkpoint), "footprint_checkpoint": None if footprint is None
         else str(footprint), "search_convention": SEARCH_CONVENTION, "clips": [clips[k].name for k in indices], "controller": controller,
         "render_clips": render_clips if render else 0, "workers": workers, "wall_time_s": wall,
-        "clip_run": _clip_run_config(), "git_commit": git_commit()}, indent=2, default=str))
+        "clip_run": _clip_run_config(replan), "git_commit": git_commit()}, indent=2, default=str))
     return {"records": records, "table": table, "folder": folder, "figure": figure, "rrd": merged,
             "wall_time_s": wall}
 
 
-def _clip_run_config() -> dict:
+def _clip_run_config(replan: str) -> dict:
     """The clip-run settings as written into config.json."""
     from dataclasses import asdict
 
     from tracking.clip_run import ClipRunConfig
 
-    config = asdict(ClipRunConfig())
+    config = asdict(ClipRunConfig(replan=replan))
     return {k: v for k, v in config.items() if k != "tracker"} | {
         "world": config["tracker"]["world"], "executor": config["tracker"]["executor"]}
 
@@ -311,9 +313,13 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--out", type=Path, default=None, help="run folder (default results/closed_loop/<time>)")
     parser.add_argument("--workers", type=int, default=1, help="parallel processes (default 1)")
     parser.add_argument("--controller", default="lqr", help="lateral controller (lqr, stanley, pure_pursuit)")
+    parser.add_argument("--replan", choices=("on_invalid", "every_frame"), default="on_invalid",
+                        help="on_invalid (default): every frame, replan only when the followed plan collides with "
+                             "that frame's detections or the vehicle is off it; every_frame: replan every frame and "
+                             "always follow the newest plan")
     args = parser.parse_args(argv)
     result = run(args.planners, args.checkpoint, args.clips_limit, args.render_clips, not args.no_render, args.out,
-                 args.workers, args.controller, clip_names=args.clip_names)
+                 args.workers, args.controller, clip_names=args.clip_names, replan=args.replan)
     folder = result["folder"]
     print(result["table"])
     print(f"\nwall time {result['wall_time_s']:.0f} s; results in {folder}/: records.csv, records.json, table.md, "
