@@ -300,6 +300,7 @@ def merge_rrd(rrd_dir: Path, out: Path) -> Path:
 
 
 def main(argv=None) -> dict[str, Any]:
+    """Command-line entry point (usage in the module docstring; ``--help`` lists the options)."""
     parser = argparse.ArgumentParser(prog="python -m experiments.closed_loop", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--clips", action="store_true", required=True, help="run the 47 held-out site clips")

@@ -129,6 +129,7 @@ def format_table(records: list[dict[str, Any]], methods: list[str]) -> str:
 
 
 def main(argv=None) -> dict[str, Any]:
+    """Command-line entry point (usage in the module docstring; ``--help`` lists the options)."""
     parser = argparse.ArgumentParser(prog="python -m experiments.planners", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")

@@ -82,6 +82,7 @@ def run(repeats: int = 5) -> dict[str, float]:
 
 
 def main(argv=None) -> dict[str, float]:
+    """Command-line entry point (usage in the module docstring; ``--help`` lists the options)."""
     parser = argparse.ArgumentParser(prog="python -m tracking.bench", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeats", type=int, default=5, help="executions per unrendered figure")

@@ -70,6 +70,7 @@ def bench(benchmark: str = "factorial", convention: str = "reference_point", epi
 
 
 def main(argv=None) -> dict:
+    """Command-line entry point (usage in the module docstring; ``--help`` lists the options)."""
     parser = argparse.ArgumentParser(prog="python -m np_sim.planners.bench", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
