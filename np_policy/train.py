@@ -37,7 +37,7 @@ from np_sim.clips import training_pool
 from np_sim.errors import ConfigError
 from np_sim.scene import Scene
 from np_sim.site import SITE_OBSERVATION
-from np_sim.starts import UniformStartSampler
+from np_sim.starts import UniformStartSampler, fixed_start_sampler
 
 BENCHMARKS = ("factorial", "topology", "examples", "site")
 
@@ -106,15 +106,16 @@ def merge_config(base: dict[str, Any], override: dict[str, Any]) -> dict[str, An
 
 
 class PairedStartSampler:
-    """Start k for scene k (the site's App. C resets); the curriculum interface with the fraction fixed at 1."""
+    """Start k for scene k (the site's App. C resets, ``fixed_start_sampler``) behind the curriculum interface,
+    with the fraction fixed at 1."""
 
     fraction = 1.0
 
     def __init__(self, starts: np.ndarray):
-        self.starts = np.asarray(starts, float)
+        self._sample = fixed_start_sampler(starts)
 
     def __call__(self, rng: np.random.Generator, scene_indices) -> np.ndarray:
-        return self.starts[np.atleast_1d(np.asarray(scene_indices, np.int64))].copy()
+        return self._sample(rng, scene_indices)
 
     def set_progress(self, progress: float, schedule: CurriculumSchedule) -> None:
         """No curriculum: every reset is full range."""
@@ -160,7 +161,7 @@ class Trainer:
             self.scenes, starts = training_pool(config.site_pool, config.seed, observation=config.env.observation,
                                                 vehicle=config.env.vehicle, progress=True)
             self.sampler = PairedStartSampler(starts)
-            select_sampler = PairedStartSampler(starts)
+            select_sampler = fixed_start_sampler(starts)
         else:
             self.scenes = training_scenes(config.benchmark)
             self.sampler = CurriculumStartSampler(self.scenes, fraction=config.curriculum.start_fraction,
