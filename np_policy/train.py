@@ -26,7 +26,7 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from np_policy.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
+from np_policy.checkpoint import CheckpointError, config_differences, load_checkpoint, save_checkpoint
 from np_policy.config import NetworkConfig, PPOConfig
 from np_policy.network import ActorCritic, clip_action
 from np_policy.ppo import RunningMeanStd, compute_targets, make_optimizer, ppo_update, set_learning_rate
@@ -179,6 +179,7 @@ class Trainer:
         self.updates = 0
         self.env_steps = 0
         self.best_reward = -np.inf
+        self.init_checkpoint: dict[str, Any] | None = None
         self.sampler.set_progress(0.0, config.curriculum)
         self.obs, _ = self.envs.reset()
         self.episode_return = np.zeros(ppo.num_train_envs)
@@ -275,7 +276,7 @@ class Trainer:
             "shuffle_rng": self.shuffle.get_state(), "obs": self.obs.copy(),
             "episode_return": self.episode_return.copy(),
             "envs": self.envs.state_dict(), "select_envs": self.select_envs.state_dict(),
-            "curriculum_fraction": self.sampler.fraction,
+            "curriculum_fraction": self.sampler.fraction, "init_checkpoint": self.init_checkpoint,
         }
 
     def restore(self, payload: dict[str, Any]) -> None:
@@ -293,12 +294,30 @@ class Trainer:
         # the selection envs reset before every scoring: only their generator state matters
         self.select_envs.load_state_dict(payload["select_envs"], self.select_envs.core.obs.copy())
         self.sampler.set_fraction(payload["curriculum_fraction"])
+        self.init_checkpoint = payload.get("init_checkpoint")
+
+    def initialize_from(self, path: str | Path) -> None:
+        """Warm start: the weights and return statistics of another run's checkpoint whose observation and network
+        configs equal this run's (anything else — convention, reward, connector, recipe — may differ); the
+        optimiser, schedule and counters start fresh."""
+        payload = load_checkpoint(path)
+        own = self.config.to_dict()
+        theirs = payload["config"]
+        diffs = config_differences(
+            {"network": own["network"], "observation": own["env"]["observation"]},
+            {"network": theirs.get("network"), "observation": theirs.get("env", {}).get("observation")})
+        if diffs:
+            raise CheckpointError(f"{path}: cannot initialise from it, its network input differs:\n  "
+                                  + "\n  ".join(diffs))
+        self.model.load_state_dict(payload["model"])
+        self.return_rms.load_state_dict(payload["return_rms"])
+        self.init_checkpoint = {"path": str(path), "epoch": payload.get("epoch"), "config": payload["config"]}
 
     def checkpoint_payload(self, selection: float) -> dict[str, Any]:
         """What ``best.pt`` holds: weights, the full config, normalisation statistics, provenance."""
         return {"model": self.model.state_dict(), "config": self.config.to_dict(),
                 "return_rms": self.return_rms.state_dict(), "epoch": self.epoch, "selection_reward": selection,
-                "env_steps": self.env_steps}
+                "env_steps": self.env_steps, "init_checkpoint": self.init_checkpoint}
 
 
 def _plot_curves(rows: list[dict[str, Any]], path: Path) -> None:
@@ -318,8 +337,12 @@ def _plot_curves(rows: list[dict[str, Any]], path: Path) -> None:
 
 
 def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resume: bool = False,
-          progress: bool = True) -> list[dict[str, Any]]:
-    """Run (or resume) training up to ``epochs`` (default: the config's); returns the metrics rows."""
+          progress: bool = True, init: str | Path | None = None) -> list[dict[str, Any]]:
+    """Run (or resume) training up to ``epochs`` (default: the config's); returns the metrics rows. ``init``
+    warm-starts a new run from another checkpoint's weights (``Trainer.initialize_from``)."""
+    if init is not None and resume:
+        raise ConfigError("train: --init starts a new run from another checkpoint; --resume continues this run's "
+                          "snapshot — give one of them")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     trainer = Trainer(config, out)
@@ -332,6 +355,8 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
         if metrics_path.exists():
             rows = [json.loads(line) for line in metrics_path.read_text().splitlines() if line.strip()]
             rows = [r for r in rows if r["epoch"] <= trainer.epoch]
+    elif init is not None:
+        trainer.initialize_from(init)
     (out / "config.json").write_text(json.dumps(config.to_dict(), indent=2))
     metrics_path.write_text("".join(json.dumps(r) + "\n" for r in rows))
     ppo = config.ppo
@@ -383,6 +408,8 @@ def main(argv=None) -> list[dict[str, Any]]:
                         "and curriculum still follow ppo.epochs")
     parser.add_argument("--out", type=Path, help="run folder (default: results/train/<benchmark>_seed<N>)")
     parser.add_argument("--resume", action="store_true", help="continue from <out>/snapshot.pt")
+    parser.add_argument("--init", type=Path, help="start a new run from this checkpoint's weights (same observation "
+                        "and network config; e.g. the footprint variant from the reference-point site checkpoint)")
     args = parser.parse_args(argv)
     overrides: dict[str, Any] = {}
     if args.config is not None:
@@ -395,8 +422,8 @@ def main(argv=None) -> list[dict[str, Any]]:
     config = TrainConfig.from_dict(data)
     out = args.out or Path("results/train") / f"{config.benchmark}_seed{config.seed}"
     try:
-        rows = train(config, out, epochs=args.epochs, resume=args.resume)
-    except CheckpointError as exc:
+        rows = train(config, out, epochs=args.epochs, resume=args.resume, init=args.init)
+    except (CheckpointError, ConfigError) as exc:
         raise SystemExit(f"error: {exc}")
     print(f"{len(rows)} epochs in {out}: metrics.jsonl, curves.png, best.pt, snapshot.pt")
     return rows

@@ -6,7 +6,8 @@ import pytest
 import torch
 
 from np_policy.checkpoint import CheckpointError, load_checkpoint
-from np_policy.train import TrainConfig, main, train
+from np_policy.train import TrainConfig, Trainer, main, train
+from np_sim.errors import ConfigError
 
 TINY = {"benchmark": "examples", "seed": 3, "curriculum_pool": 32,
         "ppo": {"num_train_envs": 16, "num_test_envs": 4, "selection_episodes": 8, "steps_per_collect": 256,
@@ -105,3 +106,23 @@ def test_site_training_pool_pairs_each_scene_with_a_valid_start():
         assert path_valid(scene, start[None], convention="footprint")
     sampler = PairedStartSampler(starts)
     assert (sampler(None, [2, 0]) == starts[[2, 0]]).all()
+
+
+def test_init_warm_starts_a_new_run_under_another_convention(tmp_path):
+    train(TrainConfig.from_dict(TINY), tmp_path / "base", epochs=1, progress=False)
+    source = tmp_path / "base" / "snapshot.pt"
+    weights = load_checkpoint(source)["model"]
+    footprint = TrainConfig.from_dict(TINY | {"env": {"collision": "footprint"}})
+    trainer = Trainer(footprint, tmp_path / "fp")
+    trainer.initialize_from(source)
+    assert all(torch.equal(weights[k], v) for k, v in trainer.model.state_dict().items())
+    assert trainer.epoch == 0 and trainer.updates == 0
+    train(footprint, tmp_path / "fp", epochs=1, progress=False, init=source)
+    run = load_checkpoint(tmp_path / "fp" / "snapshot.pt", expected_config=footprint.to_dict())
+    assert run["epoch"] == 1 and run["init_checkpoint"]["path"] == str(source)
+    assert run["init_checkpoint"]["config"]["env"]["collision"] == "reference_point"
+    with pytest.raises(CheckpointError, match=r"observation.use_lidar: checkpoint has True, expected False"):
+        train(TrainConfig.from_dict(TINY | {"env": {"observation": {"use_lidar": False}}}), tmp_path / "x",
+              epochs=1, progress=False, init=source)
+    with pytest.raises(ConfigError, match="give one of them"):
+        train(footprint, tmp_path / "fp", resume=True, init=source, progress=False)
