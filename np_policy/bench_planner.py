@@ -1,0 +1,83 @@
+"""Time NeuralParker planning queries on the Factorial frozen test starts (issue 5 speed goal: median ≤ 1 ms).
+
+``python -m np_policy.bench_planner [--checkpoint checkpoints/factorial_np_seed0.pt] [--episodes N] [--seed S]
+[--json]``
+
+Each query is ``NeuralParkerPlanner.plan(scene, start)`` (mean action in the loop, the checkpoint's connector),
+timed by the planner itself (``Plan.plan_time_s``: env reset to the returned plan). The first query of every scene
+is played once untimed (scene packing and numba dispatch warm-up), as a planner serving a map would. Printed beside
+the figures: the goal (≤ 1 ms median) and the paper's C++ figure (0.37 ms). Also printed: arcs per query and the
+compiled policy's time per call, to show where the time goes. Run it on an otherwise idle machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from np_policy.planner import NeuralParkerPlanner
+from np_sim.benchmarks import frozen_starts, load_benchmark
+
+GOAL_MEDIAN_MS = 1.0
+PAPER_CPP_MS = 0.37
+
+
+def measure(checkpoint: str | Path, episodes: int | None = None, seed: int = 0) -> dict:
+    """Median / p90 plan time (ms), success and arcs per query over ``episodes`` seeded frozen starts (all
+    1,080 by default), and the compiled policy's µs per call on the observations those queries saw."""
+    planner = NeuralParkerPlanner.from_checkpoint(checkpoint)
+    scenes = load_benchmark("factorial", "test")
+    starts = frozen_starts("factorial")
+    pairs = [(i, j) for i in range(len(scenes)) for j in range(starts.shape[1])]
+    if episodes is not None and episodes < len(pairs):
+        chosen = np.random.default_rng(seed).choice(len(pairs), size=episodes, replace=False)
+        pairs = [pairs[k] for k in sorted(chosen)]
+    for i in sorted({i for i, _ in pairs}):
+        planner.plan(scenes[i], starts[i, 0])
+    times, arcs, success = [], [], []
+    for i, j in pairs:
+        plan = planner.plan(scenes[i], starts[i, j])
+        times.append(plan.plan_time_s)
+        arcs.append(len(plan.arcs))
+        success.append(plan.success)
+    env = planner._env(scenes[0])
+    obs, _ = env.reset(options={"start": starts[0, 0]})
+    calls = 2000
+    t0 = time.perf_counter()
+    for _ in range(calls):
+        planner.actor(obs)
+    actor_us = 1e6 * (time.perf_counter() - t0) / calls
+    ms = 1e3 * np.asarray(times)
+    return {"checkpoint": str(checkpoint), "episodes": len(pairs), "success": float(np.mean(success)),
+            "plan_time_median_ms": float(np.median(ms)), "plan_time_p90_ms": float(np.percentile(ms, 90)),
+            "plan_time_mean_ms": float(ms.mean()), "arcs_median": float(np.median(arcs)),
+            "arcs_mean": float(np.mean(arcs)), "actor_us_per_call": actor_us,
+            "goal_median_ms": GOAL_MEDIAN_MS, "paper_cpp_ms": PAPER_CPP_MS}
+
+
+def main(argv=None) -> dict:
+    parser = argparse.ArgumentParser(prog="python -m np_policy.bench_planner", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--checkpoint", type=Path, default=Path("checkpoints/factorial_np_seed0.pt"))
+    parser.add_argument("--episodes", type=int, help="seeded subset of the 1,080 frozen starts (default all)")
+    parser.add_argument("--seed", type=int, default=0, help="subset seed")
+    parser.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+    args = parser.parse_args(argv)
+    result = measure(args.checkpoint, args.episodes, args.seed)
+    if args.json:
+        print(json.dumps(result))
+        return result
+    print(f"NeuralParker ({result['checkpoint']}) on {result['episodes']} Factorial frozen test starts:")
+    print(f"  plan time median {result['plan_time_median_ms']:.3f} ms (goal <= {GOAL_MEDIAN_MS}; paper C++ "
+          f"{PAPER_CPP_MS}), p90 {result['plan_time_p90_ms']:.2f} ms, mean {result['plan_time_mean_ms']:.2f} ms")
+    print(f"  success {result['success']:.3f}; arcs per query median {result['arcs_median']:.0f}, "
+          f"mean {result['arcs_mean']:.1f}; compiled policy {result['actor_us_per_call']:.0f} µs per call")
+    return result
+
+
+if __name__ == "__main__":
+    main()
