@@ -1,8 +1,9 @@
 """The real-vehicle study in closed loop: the 47 held-out site clips driven in MuJoCo by each planner (paper §V-F,
 Table ``tab:realworld``, App. C, Fig. ``fig:searchtime``; SPEC §8).
 
-``python -m experiments.closed_loop --clips [--clips-limit N | --clip-names NAME ...] [--planners neuralparker np_guided_astar
-hybrid_astar] [--checkpoint PATH] [--no-render] [--render-clips K] [--out DIR] [--workers N] [--controller lqr]``
+``python -m experiments.closed_loop --clips [--clips-limit N | --clip-names NAME ...] [--planners neuralparker
+neuralparker_footprint np_guided_astar hybrid_astar] [--checkpoint PATH] [--footprint-checkpoint PATH] [--no-render]
+[--render-clips K] [--out DIR] [--workers N] [--controller lqr]``
 
 For every evaluation clip and planner, `tracking.clip_run.run_clip` starts the MuJoCo vehicle at the clip's start
 pose in the clip's ground truth (static objects, moving pedestrians and carts, the site boundary as walls), plans
@@ -11,8 +12,9 @@ plan stops being valid (once per 0.1 s frame at most), tracks the newest plan wi
 records both verdicts: **footprint success** (no chassis contact with a ground-truth object or wall, parked within
 0.3 m / 10°) and **reference-point success** (parked, the executed reference point never inside a ground-truth
 object nor outside the boundary). Planners: NeuralParker (the site checkpoint, paper-faithful reference-point
-training), "NeuralParker (footprint)" when ``checkpoints/site_np_footprint.pt`` exists, NP-Guided A* and Hybrid
-A* (both searching under the footprint convention).
+training), "NeuralParker (footprint)" (``checkpoints/site_np_footprint.pt``, trained under the footprint
+convention; by default its row is left out with a note when the file is missing), NP-Guided A* and Hybrid A* (both
+searching under the footprint convention).
 
 The table is the ``tab:realworld`` analogue — footprint success with reference-point success in parentheses, L
 and reversals executed on each method's own footprint successes, median plan time over all calls — plus
@@ -41,14 +43,14 @@ from tqdm import tqdm
 
 from experiments.common import git_commit, run_folder, write_records
 
-PLANNERS = ("neuralparker", "np_guided_astar", "hybrid_astar")
-"""Planners of the table, in the paper's row order."""
+PLANNERS = ("neuralparker", "neuralparker_footprint", "np_guided_astar", "hybrid_astar")
+"""Planners of the table, in the paper's row order (the footprint-aware NeuralParker after the paper-faithful one)."""
 LABELS = {"neuralparker": "NeuralParker", "neuralparker_footprint": "NeuralParker (footprint)",
           "np_guided_astar": "NP-Guided A*", "hybrid_astar": "Hybrid A*"}
 DEFAULT_CHECKPOINT = Path("checkpoints/site_np.pt")
 """The shipped paper-faithful site checkpoint."""
 FOOTPRINT_CHECKPOINT = Path("checkpoints/site_np_footprint.pt")
-"""The shipped footprint-aware site checkpoint; its row appears when the file exists."""
+"""The shipped footprint-aware site checkpoint."""
 SEARCH_CONVENTION = "footprint"
 """Collision convention of Hybrid A* and of NP-Guided A*'s search (the paper validates with the footprint)."""
 PAPER = {"neuralparker": "0.60 (0.93) | 7.0 | 1.20 | 0.37", "np_guided_astar": "0.72 | 7.7 | 1.17 | 4.24",
@@ -58,7 +60,7 @@ PAPER = {"neuralparker": "0.60 (0.93) | 7.0 | 1.20 | 0.37", "np_guided_astar": "
 
 def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Path | None) -> dict[str, Any]:
     """One planner per name; NeuralParker and NP-Guided A* share the site policy of ``checkpoint``."""
-    unknown = [n for n in names if n not in PLANNERS and n != "neuralparker_footprint"]
+    unknown = [n for n in names if n not in PLANNERS]
     if unknown:
         raise ValueError(f"experiments.closed_loop: unknown planner(s) {unknown}; expected some of {list(PLANNERS)}")
     from np_sim.planners import HybridAStar
@@ -74,6 +76,10 @@ def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Pat
         from np_policy.planner import NeuralParkerPlanner
 
         learned = NeuralParkerPlanner.from_checkpoint(checkpoint)
+    if "neuralparker_footprint" in names and not Path(footprint_checkpoint).exists():
+        raise FileNotFoundError(
+            f"experiments.closed_loop: the footprint-aware site checkpoint {footprint_checkpoint} does not exist; "
+            f"pass --footprint-checkpoint PATH or leave neuralparker_footprint out of --planners")
     for name in names:
         if name == "hybrid_astar":
             planners[name] = HybridAStar(convention=SEARCH_CONVENTION)
@@ -83,7 +89,7 @@ def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Pat
             planners[name] = NPGuidedAStar(learned, HybridAStar(convention=SEARCH_CONVENTION))
         elif name == "neuralparker":
             planners[name] = learned
-        else:
+        else:  # neuralparker_footprint
             from np_policy.planner import NeuralParkerPlanner
 
             planners[name] = NeuralParkerPlanner.from_checkpoint(footprint_checkpoint)
@@ -140,8 +146,11 @@ def _work(args) -> list[dict]:
 def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT, clips_limit: int | None = None,
         render_clips: int = 3, render: bool = True, out: Path | None = None, workers: int = 1,
         controller: str = "lqr", rrd: bool = True, progress: bool = True,
-        clip_names: list[str] | None = None, replan: str = "on_invalid") -> dict[str, Any]:
-    """Run the clips × planners; returns records, table text, folder and notes (see the module docstring)."""
+        clip_names: list[str] | None = None, replan: str = "on_invalid",
+        footprint_checkpoint: Path = FOOTPRINT_CHECKPOINT) -> dict[str, Any]:
+    """Run the clips × planners; returns records, table text, folder and notes (see the module docstring).
+    ``planners=None`` runs all of them, leaving out the footprint-aware NeuralParker (with a note) when
+    ``footprint_checkpoint`` is missing; a planner named explicitly must have its checkpoint."""
     from np_sim.clips import load_clips
     from tracking.controllers import CONTROLLERS
 
@@ -151,12 +160,10 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
         raise ValueError(f"--workers: expected >= 1, got {workers}")
     names = list(PLANNERS if planners is None else planners)
     notes = []
-    footprint = FOOTPRINT_CHECKPOINT if FOOTPRINT_CHECKPOINT.exists() else None
-    if "neuralparker" in names:
-        if footprint is not None:
-            names.insert(names.index("neuralparker") + 1, "neuralparker_footprint")
-        else:
-            notes.append(f"NeuralParker (footprint): {FOOTPRINT_CHECKPOINT} is missing, row left out.")
+    footprint = Path(footprint_checkpoint)
+    if planners is None and not footprint.exists():
+        names.remove("neuralparker_footprint")
+        notes.append(f"NeuralParker (footprint): {footprint} is missing, row left out.")
     build_planners(names, checkpoint, footprint)  # fail fast on a missing checkpoint, before any work
     clips = load_clips("eval")
     if clip_names:
@@ -193,8 +200,9 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
     figure = search_time_figure(records, folder / "search_time.png")
     merged = merge_rrd(rrd_dir, folder / "closed_loop.rrd") if rrd_dir is not None else None
     (folder / "config.json").write_text(json.dumps({
-        "planners": names, "checkpoint": str(checkpoint), "footprint_checkpoint": None if footprint is None
-        else str(footprint), "search_convention": SEARCH_CONVENTION, "clips": [clips[k].name for k in indices], "controller": controller,
+        "planners": names, "checkpoint": str(checkpoint),
+        "footprint_checkpoint": str(footprint) if "neuralparker_footprint" in names else None,
+        "search_convention": SEARCH_CONVENTION, "clips": [clips[k].name for k in indices], "controller": controller,
         "render_clips": render_clips if render else 0, "workers": workers, "wall_time_s": wall,
         "clip_run": _clip_run_config(replan), "git_commit": git_commit()}, indent=2, default=str))
     return {"records": records, "table": table, "folder": folder, "figure": figure, "rrd": merged,
@@ -306,9 +314,13 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--clips", action="store_true", required=True, help="run the 47 held-out site clips")
     parser.add_argument("--clips-limit", type=int, default=None, help="only the first N clips")
     parser.add_argument("--clip-names", nargs="+", default=None, help="only these clips (e.g. eval-1000016)")
-    parser.add_argument("--planners", nargs="+", choices=PLANNERS, default=list(PLANNERS))
+    parser.add_argument("--planners", nargs="+", choices=PLANNERS, default=None,
+                        help="planners to run (default all; neuralparker_footprint is left out with a note when "
+                             "its checkpoint is missing)")
     parser.add_argument("--checkpoint", type=Path, default=DEFAULT_CHECKPOINT,
-                        help=f"site NeuralParker checkpoint (default {DEFAULT_CHECKPOINT})")
+                        help=f"site NeuralParker checkpoint, paper-faithful (default {DEFAULT_CHECKPOINT})")
+    parser.add_argument("--footprint-checkpoint", type=Path, default=FOOTPRINT_CHECKPOINT,
+                        help=f"footprint-aware site NeuralParker checkpoint (default {FOOTPRINT_CHECKPOINT})")
     parser.add_argument("--no-render", action="store_true", help="no off-screen camera frames in the .rrd")
     parser.add_argument("--render-clips", type=int, default=3, help="clips with camera frames (default 3)")
     parser.add_argument("--out", type=Path, default=None, help="run folder (default results/closed_loop/<time>)")
@@ -320,7 +332,8 @@ def main(argv=None) -> dict[str, Any]:
                              "always follow the newest plan")
     args = parser.parse_args(argv)
     result = run(args.planners, args.checkpoint, args.clips_limit, args.render_clips, not args.no_render, args.out,
-                 args.workers, args.controller, clip_names=args.clip_names, replan=args.replan)
+                 args.workers, args.controller, clip_names=args.clip_names, replan=args.replan,
+                 footprint_checkpoint=args.footprint_checkpoint)
     folder = result["folder"]
     print(result["table"])
     print(f"\nwall time {result['wall_time_s']:.0f} s; results in {folder}/: records.csv, records.json, table.md, "

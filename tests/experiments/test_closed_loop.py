@@ -53,3 +53,9 @@ def test_two_clips_run_end_to_end_and_the_known_feasible_clip_parks(tmp_path, si
 def test_a_missing_checkpoint_is_a_clear_error(tmp_path):
     with pytest.raises(FileNotFoundError, match="site NeuralParker checkpoint"):
         main(["--clips", "--clips-limit", "1", "--checkpoint", str(tmp_path / "none.pt"), "--out", str(tmp_path)])
+
+
+def test_a_named_footprint_planner_needs_its_checkpoint(tmp_path, site_checkpoint):
+    with pytest.raises(FileNotFoundError, match="footprint-aware site checkpoint .*none_fp.pt does not exist"):
+        main(["--clips", "--clips-limit", "1", "--planners", "neuralparker_footprint", "--checkpoint",
+              str(site_checkpoint), "--footprint-checkpoint", str(tmp_path / "none_fp.pt"), "--out", str(tmp_path)])
