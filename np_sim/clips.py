@@ -78,6 +78,7 @@ from shapely.geometry import Polygon as ShapelyPolygon
 
 from np_sim.errors import ConfigError, NPSimError, SceneError
 from np_sim.geodesic import GeodesicGrid, geodesic_grid
+from np_sim.frames import place
 from np_sim.kinematics import wrap_angle
 from np_sim.scene import PolygonObstacle, Scene
 from np_sim.site import (
@@ -275,7 +276,7 @@ class TrackedObject:
 
     def polygon(self, frame: int) -> np.ndarray:
         """(k, 2) world-frame outline at ``frame`` (m)."""
-        return _transform(self.outline, self.poses[min(frame, len(self.poses) - 1)])
+        return place(self.outline, self.poses[min(frame, len(self.poses) - 1)])
 
 
 class Difficulty(NamedTuple):
@@ -509,20 +510,6 @@ def _json_float(value: float) -> float | str:
 # ---------------------------------------------------------------------- geometry helpers
 
 
-def _transform(local: np.ndarray, pose) -> np.ndarray:
-    """(k, 2) points ``local`` of an object frame placed at pose (x, y, yaw)."""
-    c, s = math.cos(float(pose[2])), math.sin(float(pose[2]))
-    return np.stack([pose[0] + c * local[:, 0] - s * local[:, 1], pose[1] + s * local[:, 0] + c * local[:, 1]], axis=1)
-
-
-def _transform_frames(local: np.ndarray, poses: np.ndarray) -> np.ndarray:
-    """(n, k, 2) points ``local`` (k, 2) placed at each of ``poses`` (n, 3)."""
-    c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
-    x = poses[:, 0:1] + c * local[None, :, 0] - s * local[None, :, 1]
-    y = poses[:, 1:2] + s * local[None, :, 0] + c * local[None, :, 1]
-    return np.stack([x, y], axis=-1)
-
-
 def polygon_distances(point, polygons: np.ndarray) -> np.ndarray:
     """Euclidean distance from ``point`` (2,) to each polygon of ``polygons`` (n, k, 2); 0 inside or on an edge."""
     p = np.asarray(point, dtype=np.float64)
@@ -640,7 +627,7 @@ def target_clearance(site: Site, target, objects: Sequence[TrackedObject], n_fra
     polygons = []
     for obj in objects:
         frames = range(n_frames) if obj.moving else range(1)
-        polygons.extend(shapely.polygons(_transform_frames(obj.outline, obj.poses[list(frames)])))
+        polygons.extend(shapely.polygons(place(obj.outline, obj.poses[list(frames)])))
     if polygons:
         best = min(best, float(np.min(shapely.distance(footprint, np.array(polygons, dtype=object)))))
     return float(best)
@@ -702,7 +689,7 @@ class _Placer:
     def try_place(self, outline: np.ndarray, pose) -> np.ndarray | None:
         """Round ``pose`` (mm, 1e-4 rad); place and return it if the outline fits there, else None."""
         pose = np.array([round(float(pose[0]), 3), round(float(pose[1]), 3), round(float(wrap_angle(pose[2])), 4)])
-        polygon = ShapelyPolygon(_transform(outline, pose))
+        polygon = ShapelyPolygon(place(outline, pose))
         if not self.fits(polygon):
             return None
         self.placed.append(polygon)
@@ -941,7 +928,7 @@ def _detections(objects: tuple[TrackedObject, ...], n_frames: int, missed: np.nd
     for j, obj in enumerate(objects):
         five = five_vertex_outline(obj.outline, rng)
         poses = obj.poses if obj.moving else np.repeat(obj.poses, n_frames, axis=0)
-        base[j] = _transform_frames(five, poses)
+        base[j] = place(five, poses)
     noise = jitter_sd * np.clip(rng.standard_normal((n_obj, n_frames, 5, 2)), -config.jitter_truncation_sd,
                                 config.jitter_truncation_sd)
     cm = np.zeros((n_obj, n_frames, 5, 2), dtype=np.int64)

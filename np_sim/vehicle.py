@@ -63,7 +63,6 @@ class VehicleSpec:
 
     def footprint(self, pose) -> np.ndarray:
         """(4, 2) rectangle corners in the world frame for a reference-point pose (x, y, θ)."""
-        x, y, th = float(pose[0]), float(pose[1]), float(pose[2])
-        c, s = math.cos(th), math.sin(th)
-        local = self.footprint_local()
-        return np.stack([x + c * local[:, 0] - s * local[:, 1], y + s * local[:, 0] + c * local[:, 1]], axis=1)
+        from np_sim.frames import place
+
+        return place(self.footprint_local(), np.asarray(pose, float)[:3])
