@@ -58,12 +58,17 @@ PAPER = {"neuralparker": "0.60 (0.93) | 7.0 | 1.20 | 0.37", "np_guided_astar": "
 """Table tab:realworld (real vehicle, C++ plan times): succ. | L | Rev. | plan time (ms)."""
 
 
-def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Path | None) -> dict[str, Any]:
-    """One planner per name; NeuralParker and NP-Guided A* share the site policy of ``checkpoint``."""
+def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Path | None,
+                   search_margin_m: float = 0.0) -> dict[str, Any]:
+    """One planner per name; NeuralParker and NP-Guided A* share the site policy of ``checkpoint``; Hybrid A* and
+    NP-Guided A*'s search plan for the footprint grown by ``search_margin_m`` on every side."""
     unknown = [n for n in names if n not in PLANNERS]
     if unknown:
         raise ValueError(f"experiments.closed_loop: unknown planner(s) {unknown}; expected some of {list(PLANNERS)}")
-    from np_sim.planners import HybridAStar
+    from np_sim.planners import HybridAStar, HybridAStarConfig
+    from np_sim.vehicle import VehicleSpec
+
+    search = HybridAStarConfig(vehicle=VehicleSpec().inflated(search_margin_m))
 
     planners: dict[str, Any] = {}
     learned = None
@@ -82,11 +87,11 @@ def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Pat
             f"pass --footprint-checkpoint PATH or leave neuralparker_footprint out of --planners")
     for name in names:
         if name == "hybrid_astar":
-            planners[name] = HybridAStar(convention=SEARCH_CONVENTION)
+            planners[name] = HybridAStar(search, convention=SEARCH_CONVENTION)
         elif name == "np_guided_astar":
             from np_policy.staged import NPGuidedAStar
 
-            planners[name] = NPGuidedAStar(learned, HybridAStar(convention=SEARCH_CONVENTION))
+            planners[name] = NPGuidedAStar(learned, HybridAStar(search, convention=SEARCH_CONVENTION))
         elif name == "neuralparker":
             planners[name] = learned
         else:  # neuralparker_footprint
@@ -97,15 +102,16 @@ def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Pat
 
 
 def clip_rows(clip, planners: dict[str, Any], controller: str, rrd_dir: Path | None, render: bool,
-              replan: str = "on_invalid") -> list[dict]:
-    """Run one clip with every planner; one record row per planner."""
-    from tracking.clip_run import ClipRunConfig, clip_world, object_of_geom, run_clip
+              config=None) -> list[dict]:
+    """Run one clip with every planner (``config``: a `tracking.clip_run.ClipRunConfig`, default its defaults);
+    one record row per planner."""
+    from tracking.clip_run import clip_world, object_of_geom, run_clip
 
     ground = clip_world(clip)
     rows = []
     for name, planner in planners.items():
         rrd = None if rrd_dir is None else rrd_dir / f"{clip.name}_{name}.rrd"
-        run = run_clip(clip, planner, controller, config=ClipRunConfig(replan=replan), rerun_path=rrd,
+        run = run_clip(clip, planner, controller, config=config, rerun_path=rrd,
                        render=render)
         rec, first = run.record, run.first_plan
         times = np.array([c.plan_time_s for c in run.calls]) * 1e3
@@ -131,26 +137,31 @@ _WORKER: dict[str, Any] = {}
 """Per-process state of the worker pool: clips and planners, built once per process."""
 
 
-def _init_worker(names, checkpoint, footprint_checkpoint) -> None:
+def _init_worker(names, checkpoint, footprint_checkpoint, search_margin_m) -> None:
     from np_sim.clips import load_clips
 
     _WORKER["clips"] = load_clips("eval")
-    _WORKER["planners"] = build_planners(names, checkpoint, footprint_checkpoint)
+    _WORKER["planners"] = build_planners(names, checkpoint, footprint_checkpoint, search_margin_m)
 
 
 def _work(args) -> list[dict]:
-    index, controller, rrd_dir, render, replan = args
-    return clip_rows(_WORKER["clips"][index], _WORKER["planners"], controller, rrd_dir, render, replan)
+    index, controller, rrd_dir, render, clip_config = args
+    return clip_rows(_WORKER["clips"][index], _WORKER["planners"], controller, rrd_dir, render, clip_config)
 
 
 def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT, clips_limit: int | None = None,
         render_clips: int = 3, render: bool = True, out: Path | None = None, workers: int = 1,
         controller: str = "lqr", rrd: bool = True, progress: bool = True,
         clip_names: list[str] | None = None, replan: str = "on_invalid",
-        footprint_checkpoint: Path = FOOTPRINT_CHECKPOINT) -> dict[str, Any]:
+        footprint_checkpoint: Path = FOOTPRINT_CHECKPOINT, track_window: int = 1,
+        search_margin_m: float = 0.0) -> dict[str, Any]:
     """Run the clips × planners; returns records, table text, folder and notes (see the module docstring).
     ``planners=None`` runs all of them, leaving out the footprint-aware NeuralParker (with a note) when
-    ``footprint_checkpoint`` is missing; a planner named explicitly must have its checkpoint."""
+    ``footprint_checkpoint`` is missing; a planner named explicitly must have its checkpoint. ``track_window``
+    and ``search_margin_m`` are the perception filter and the searches' safety margin (both off by default,
+    as on the paper's vehicle)."""
+    from tracking.clip_run import ClipRunConfig
+
     from np_sim.clips import load_clips
     from tracking.controllers import CONTROLLERS
 
@@ -164,7 +175,8 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
     if planners is None and not footprint.exists():
         names.remove("neuralparker_footprint")
         notes.append(f"NeuralParker (footprint): {footprint} is missing, row left out.")
-    build_planners(names, checkpoint, footprint)  # fail fast on a missing checkpoint, before any work
+    clip_config = ClipRunConfig(replan=replan, track_window=track_window)
+    build_planners(names, checkpoint, footprint, search_margin_m)  # fail fast on a bad setting, before any work
     clips = load_clips("eval")
     if clip_names:
         known = {c.name: k for k, c in enumerate(clips)}
@@ -176,18 +188,18 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
         indices = list(range(len(clips)))[:clips_limit]
     folder = run_folder("closed_loop", out)
     rrd_dir = folder / "rrd" if rrd else None
-    jobs = [(k, controller, rrd_dir, render and n < render_clips, replan) for n, k in enumerate(indices)]
+    jobs = [(k, controller, rrd_dir, render and n < render_clips, clip_config) for n, k in enumerate(indices)]
     wall0 = time.perf_counter()
     bar = tqdm(total=len(jobs) * len(names), desc="clips × planners in MuJoCo", unit="run", disable=not progress)
     results: list[list[dict]] = []
     if workers == 1:
-        _init_worker(names, checkpoint, footprint)
+        _init_worker(names, checkpoint, footprint, search_margin_m)
         for job in jobs:
             results.append(_work(job))
             bar.update(len(names))
     else:
         with ProcessPoolExecutor(workers, initializer=_init_worker,
-                                 initargs=(names, checkpoint, footprint)) as pool:
+                                 initargs=(names, checkpoint, footprint, search_margin_m)) as pool:
             for rows in pool.map(_work, jobs):  # in clip order, so the records do not depend on the workers
                 results.append(rows)
                 bar.update(len(names))
@@ -204,18 +216,17 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
         "footprint_checkpoint": str(footprint) if "neuralparker_footprint" in names else None,
         "search_convention": SEARCH_CONVENTION, "clips": [clips[k].name for k in indices], "controller": controller,
         "render_clips": render_clips if render else 0, "workers": workers, "wall_time_s": wall,
-        "clip_run": _clip_run_config(replan), "git_commit": git_commit()}, indent=2, default=str))
+        "search_margin_m": search_margin_m, "clip_run": _clip_run_config(clip_config), "git_commit": git_commit()},
+        indent=2, default=str))
     return {"records": records, "table": table, "folder": folder, "figure": figure, "rrd": merged,
             "wall_time_s": wall}
 
 
-def _clip_run_config(replan: str) -> dict:
+def _clip_run_config(clip_config) -> dict:
     """The clip-run settings as written into config.json."""
     from dataclasses import asdict
 
-    from tracking.clip_run import ClipRunConfig
-
-    config = asdict(ClipRunConfig(replan=replan))
+    config = asdict(clip_config)
     return {k: v for k, v in config.items() if k != "tracker"} | {
         "world": config["tracker"]["world"], "executor": config["tracker"]["executor"]}
 
@@ -330,10 +341,18 @@ def main(argv=None) -> dict[str, Any]:
                         help="on_invalid (default): every frame, replan only when the followed plan collides with "
                              "that frame's detections or the vehicle is off it; every_frame: replan every frame and "
                              "always follow the newest plan")
+    parser.add_argument("--track-window", type=int, default=1,
+                        help="filter each object's detections over this many frames before planning (mean shape "
+                             "at the latest centroid, dropouts held; default 1 = raw frames, as on the paper's "
+                             "vehicle)")
+    parser.add_argument("--search-margin", type=float, default=0.0, metavar="M",
+                        help="Hybrid A* and NP-Guided A*'s search plan for the footprint grown by M metres on every "
+                             "side (default 0)")
     args = parser.parse_args(argv)
     result = run(args.planners, args.checkpoint, args.clips_limit, args.render_clips, not args.no_render, args.out,
                  args.workers, args.controller, clip_names=args.clip_names, replan=args.replan,
-                 footprint_checkpoint=args.footprint_checkpoint)
+                 footprint_checkpoint=args.footprint_checkpoint, track_window=args.track_window,
+                 search_margin_m=args.search_margin)
     folder = result["folder"]
     print(result["table"])
     print(f"\nwall time {result['wall_time_s']:.0f} s; results in {folder}/: records.csv, records.json, table.md, "

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -48,6 +49,15 @@ class VehicleSpec:
     def max_steer_rad(self) -> float:
         """Front-wheel steering angle needed for κ_max on the kinematic bicycle: atan(κ_max · wheelbase)."""
         return math.atan(self.kappa_max * self.wheelbase_m)
+
+    def inflated(self, margin_m: float) -> "VehicleSpec":
+        """The same vehicle with ``margin_m`` of clearance added on every side of the footprint (a planner's safety
+        margin); kinematics (wheelbase, κ_max) unchanged."""
+        if not (math.isfinite(margin_m) and margin_m >= 0):
+            raise ConfigError(f"VehicleSpec.inflated: margin must be a finite number >= 0 m, got {margin_m!r}")
+        return dataclasses.replace(self, front_overhang_m=self.front_overhang_m + margin_m,
+                                   rear_overhang_m=self.rear_overhang_m + margin_m,
+                                   width_m=self.width_m + 2.0 * margin_m)
 
     def footprint_local(self) -> np.ndarray:
         """(4, 2) rectangle corners in the vehicle frame, counter-clockwise from rear-right."""

@@ -76,10 +76,15 @@ class ClipRunConfig:
     """Spacing of the followed plan's samples checked against each frame (m)."""
     retry_period_s: float = 0.5
     """Least sim time between a failed planner call and the next call (s)."""
+    track_window: int = 1
+    """Frames the planner's detections are filtered over (`Clip.tracked_detections`); 1 = each frame's raw
+    detections, as the paper's vehicle used them."""
 
     def __post_init__(self) -> None:
         if self.replan not in REPLAN_MODES:
             raise ValueError(f"ClipRunConfig.replan: expected one of {REPLAN_MODES}, got {self.replan!r}")
+        if self.track_window < 1:
+            raise ValueError(f"ClipRunConfig.track_window: expected >= 1 frame, got {self.track_window!r}")
         if not (self.deviation_m > 0 and self.check_ds_m > 0):
             raise ValueError(f"ClipRunConfig: deviation_m and check_ds_m must be > 0, got {self.deviation_m!r}, "
                              f"{self.check_ds_m!r}")
@@ -272,7 +277,7 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
         if t < wait_until[0] - 1e-9:
             return None  # shortly after a failed call
         frame = min(int(round(t / dt)), clip.n_frames - 1)
-        scene = clip.frame_scene(frame, pose=pose)
+        scene = clip.frame_scene(frame, pose=pose, track_window=config.track_window)
         if config.replan == "on_invalid" and followed:
             path = followed[0]
             if path.advance(pose) <= config.deviation_m and path_valid(scene, path.remaining(), convention,
@@ -289,7 +294,7 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
 
         log = ClipRerunObserver(world, tracker, Path(rerun_path), render, clip_name=clip.name)
         parts.append(log)
-    first = plan_at(start, 0.0, 0, clip.frame_scene(0, pose=start))
+    first = plan_at(start, 0.0, 0, clip.frame_scene(0, pose=start, track_window=config.track_window))
     gt0 = clip.frame_scene(0, ground_truth=True)
     record = execute(ground.scene, first, controller, replan=replan, config=tracker, observer=Observers(parts),
                      world=world)

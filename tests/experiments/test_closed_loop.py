@@ -59,3 +59,13 @@ def test_a_named_footprint_planner_needs_its_checkpoint(tmp_path, site_checkpoin
     with pytest.raises(FileNotFoundError, match="footprint-aware site checkpoint .*none_fp.pt does not exist"):
         main(["--clips", "--clips-limit", "1", "--planners", "neuralparker_footprint", "--checkpoint",
               str(site_checkpoint), "--footprint-checkpoint", str(tmp_path / "none_fp.pt"), "--out", str(tmp_path)])
+
+
+def test_perception_filter_and_search_margin_reach_the_run(tmp_path):
+    out = tmp_path / "run"
+    main(["--clips", "--clip-names", KNOWN_FEASIBLE, "--planners", "hybrid_astar", "--no-render",
+          "--track-window", "5", "--search-margin", "0.15", "--out", str(out)])
+    config = json.loads((out / "config.json").read_text())
+    assert config["search_margin_m"] == 0.15 and config["clip_run"]["track_window"] == 5
+    row = next(csv.DictReader((out / "records.csv").open()))
+    assert row["footprint_success"] == "1", row["detail"]

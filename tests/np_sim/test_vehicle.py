@@ -28,3 +28,17 @@ def test_footprint_corners_rotate_about_the_rear_axle():
 def test_bad_spec_is_an_error():
     with pytest.raises(ConfigError, match=r"VehicleSpec.width_m: expected a finite positive number, got -1"):
         VehicleSpec(width_m=-1)
+
+
+def test_inflated_footprint_contains_the_vehicle_with_the_margin_on_every_side():
+    from shapely.geometry import Polygon
+
+    v = VehicleSpec()
+    pose = (3.0, -2.0, 0.7)
+    grown = Polygon(v.inflated(0.15).footprint(pose))
+    body = Polygon(v.footprint(pose))
+    assert grown.contains(body.buffer(0.149, join_style="mitre"))
+    assert not grown.contains(body.buffer(0.151, join_style="mitre"))
+    assert v.inflated(0.15).wheelbase_m == v.wheelbase_m and v.inflated(0.15).kappa_max == v.kappa_max
+    with pytest.raises(ConfigError, match="margin must be"):
+        v.inflated(-0.1)
