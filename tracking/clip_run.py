@@ -15,7 +15,10 @@ and, by ``ClipRunConfig.replan``:
   A* on eval-1000001 switched plans 529 times and timed out after 60 s), hence the default.
 
 After a failed call the planner is called again no sooner than ``retry_period_s`` (0.5 s) later (a failing
-rollout or search is the slowest call there is). A planner that raises on a start it considers in collision
+rollout or search is the slowest call there is). When the very first call fails, the vehicle waits at rest at
+its start and retries every ``retry_period_s`` with the frame of that time until a plan succeeds (then the drive
+starts at that sim time) or ``max_time_s`` passes (``plan_failed``); a mover touching the waiting vehicle is a
+contact (checked against the movers' interpolated outlines at the control rate). A planner that raises on a start it considers in collision
 counts as a failed call. Once the vehicle stands
 within the parking tolerance of the target it stops replanning (a parked vehicle does not start a new
 manoeuvre). Obstacles, movers and walls are detection only (`WorldConfig.solid_obstacles=False`) and the run does
@@ -41,11 +44,13 @@ import shapely
 from np_sim.clips import Clip
 from np_sim.collision import path_valid
 from np_sim.errors import ConfigError
+from np_sim.frames import place
 from np_sim.plan import Plan
 from np_sim.scene import PolygonObstacle, Scene
 from tracking.config import ExecutorConfig, TrackerConfig, WorldConfig
 from tracking.executor import execute
 from tracking.movers import Mover, poses_at
+from tracking.record import Contact
 from tracking.observer import Observers, RunObserver, TrajectoryRecorder
 from tracking.record import ExecutionRecord
 from tracking.validators import validate_plan
@@ -226,6 +231,20 @@ class ClipRun:
         return self.parked and not self.reference_point_detail
 
 
+def _waiting_contacts(ground: ClipWorld, start: np.ndarray, times: np.ndarray, vehicle) -> list[Contact]:
+    """Movers touching the vehicle standing at ``start`` at ``times`` (the first touch of each mover)."""
+    body = shapely.Polygon(vehicle.footprint(start))
+    touches = []
+    for mover in ground.movers:
+        poses = poses_at(mover.poses, mover.frame_dt_s, times)
+        outlines = shapely.polygons(place(mover.outline, poses))
+        hit = np.flatnonzero(shapely.intersects(outlines, body))
+        if len(hit):
+            k = int(hit[0])
+            touches.append(Contact(time_s=float(times[k]), geom=mover.name, position=tuple(map(float, poses[k, :2]))))
+    return sorted(touches, key=lambda c: c.time_s)
+
+
 def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunConfig | None = None,
              rerun_path: str | Path | None = None, render: bool = False) -> ClipRun:
     """Drive ``clip`` in closed loop with ``planner`` replanning once per frame (module docstring).
@@ -295,15 +314,31 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
         log = ClipRerunObserver(world, tracker, Path(rerun_path), render, clip_name=clip.name)
         parts.append(log)
     first = plan_at(start, 0.0, 0, clip.frame_scene(0, pose=start, track_window=config.track_window))
+    driven, t0 = first, 0.0
+    while not driven.success and t0 + config.retry_period_s < tracker.executor.max_time_s - 1e-9:
+        t0 += config.retry_period_s
+        frame = min(int(round(t0 / dt)), clip.n_frames - 1)
+        driven = plan_at(start, t0, frame, clip.frame_scene(frame, pose=start, track_window=config.track_window))
+    if t0 > 0.0:
+        recorder.start_time_s = t0
     gt0 = clip.frame_scene(0, ground_truth=True)
-    record = execute(ground.scene, first, controller, replan=replan, config=tracker, observer=Observers(parts),
-                     world=world)
+    record = execute(ground.scene, driven, controller, replan=replan, config=tracker, observer=Observers(parts),
+                     world=world, start_time_s=t0 if driven.success else 0.0)
+    waiting = np.arange(0.0, t0, tracker.executor.control_dt_s) if driven.success else np.zeros(0)
+    if len(waiting):
+        touches = _waiting_contacts(ground, start, waiting, tracker.vehicle)
+        if touches:
+            record = dataclasses.replace(
+                record, success=False, contacts=touches + list(record.contacts), reason="contact",
+                detail=f"chassis touched {touches[0].geom} at t = {touches[0].time_s:.2f} s (waiting at the start)")
     if rerun_path is not None and record.reason in ("plan_failed", "empty_plan", "steering_limit",
                                                     "start_in_collision"):
         log.finish_unrun(record)  # the executor returned before the loop started: no hooks were called
     err_m, err_rad = record.final_error
     parked = record.reason in ("", "contact") and err_m <= tol_m and err_rad <= tol_rad
     trajectory = recorder.array() if recorder.rows else np.array([[0.0, *start]])
+    if len(waiting):
+        trajectory = np.vstack([np.column_stack([waiting, np.tile(start, (len(waiting), 1))]), trajectory])
     return ClipRun(record=record, first_plan=first, calls=calls, trajectory=trajectory, parked=parked,
                    reference_point_detail=reference_point_violation(clip, ground, trajectory) if parked else "",
                    first_plan_valid=validate_plan(gt0, first))

@@ -156,7 +156,7 @@ def _segments(plan: Plan, config: TrackerConfig, start_speed_mps: float = 0.0) -
 def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = False,
             rerun_path: str | Path | None = None, *, replan: Replanner | None = None,
             config: TrackerConfig | None = None, observer: RunObserver | None = None,
-            world: World | None = None) -> ExecutionRecord:
+            world: World | None = None, start_time_s: float = 0.0) -> ExecutionRecord:
     """Drive ``plan`` on the MuJoCo vehicle in ``scene`` from ``plan.start`` (see the module docstring).
 
     Parameters
@@ -181,6 +181,9 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
         A world already built from ``scene`` by `build_world` with this ``config`` (e.g. with moving objects);
         the vehicle is placed at ``plan.start``. Default: built here from ``scene``. ``config`` defaults to the
         world's.
+    start_time_s
+        Sim time at which the run starts (moving objects are at their pose of that time; replanning mode's
+        ``max_time_s`` stays an absolute time): a vehicle that waited at its start for a first plan.
 
     Returns
     -------
@@ -210,14 +213,15 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
         world.set_pose(start)
     observers = _observers(world, config, render, rerun_path, observer)
     loop = _Loop(world, controller, config, observers)
+    loop.t = float(start_time_s)
     loop.follow(segments, moving=False)
     observers.on_start(world, plan, segments)
     ec = config.executor
     if replan is None:
-        t_max = ec.timeout_factor * sum(s.duration_s() for s in segments) + ec.timeout_margin_s
+        t_max = loop.t + ec.timeout_factor * sum(s.duration_s() for s in segments) + ec.timeout_margin_s
     else:
         t_max = ec.max_time_s
-    plans_used, replans_failed, next_replan = 1, 0, ec.replan_period_s
+    plans_used, replans_failed, next_replan = 1, 0, loop.t + ec.replan_period_s
     stop = ""
     wall0 = time.perf_counter()
     while True:

@@ -53,11 +53,12 @@ class Observers(RunObserver):
 class TrajectoryRecorder(RunObserver):
     """Records the executed reference-point trajectory: (t, x, y, θ) at the start and after every control step."""
 
-    def __init__(self):
+    def __init__(self, start_time_s: float = 0.0):
+        self.start_time_s = float(start_time_s)
         self.rows: list[tuple[float, float, float, float]] = []
 
     def on_start(self, world, plan, segments) -> None:
-        self.rows = [(0.0, *map(float, world.pose()))]
+        self.rows = [(self.start_time_s, *map(float, world.pose()))]
 
     def on_step(self, t, world, state, command, target_speed) -> None:
         self.rows.append((float(t), *map(float, world.pose())))

@@ -1,0 +1,45 @@
+"""tracking.clip_run: a vehicle whose first planner calls fail waits at its start and retries."""
+
+import numpy as np
+
+from np_sim.clips import load_clips
+from np_sim.plan import Plan
+from np_sim.planners import HybridAStar
+from tracking.clip_run import ClipRunConfig, run_clip
+
+
+class FailingFirst:
+    """Hybrid A* (footprint) behind ``failures`` failed calls."""
+
+    convention = "footprint"
+
+    def __init__(self, failures: int):
+        self.failures, self.search = failures, HybridAStar(convention="footprint")
+
+    def plan(self, scene, start):
+        if self.failures:
+            self.failures -= 1
+            return Plan(start=np.asarray(start, float), reason="budget")
+        return self.search.plan(scene, start)
+
+
+def test_a_failed_first_plan_is_retried_from_the_start_and_the_drive_begins_later():
+    clip = next(c for c in load_clips("eval") if c.name == "eval-1000016")
+    run = run_clip(clip, FailingFirst(3))
+    retry = ClipRunConfig().retry_period_s
+    assert [c.success for c in run.calls[:4]] == [False, False, False, True]
+    assert np.allclose([c.time_s for c in run.calls[:4]], [0.0, retry, 2 * retry, 3 * retry])
+    assert run.footprint_success, run.record.detail
+    t = run.trajectory[:, 0]
+    assert t[0] == 0.0 and np.all(np.diff(t) > 0)
+    waiting = t < 3 * retry
+    assert np.allclose(run.trajectory[waiting, 1:], clip.start)  # stood still while waiting
+    assert run.record.sim_time_s > 3 * retry
+
+
+def test_a_planner_that_never_succeeds_ends_as_plan_failed():
+    clip = next(c for c in load_clips("eval") if c.name == "eval-1000016")
+    config = ClipRunConfig()
+    run = run_clip(clip, FailingFirst(10_000), config=config)
+    assert run.record.reason == "plan_failed" and not run.parked
+    assert len(run.calls) == int(round(config.tracker.executor.max_time_s / config.retry_period_s))
