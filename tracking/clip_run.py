@@ -17,8 +17,8 @@ and, by ``ClipRunConfig.replan``:
 After a failed call the planner is called again no sooner than ``retry_period_s`` (0.5 s) later (a failing
 rollout or search is the slowest call there is). When the very first call fails, the vehicle waits at rest at
 its start and retries every ``retry_period_s`` with the frame of that time until a plan succeeds (then the drive
-starts at that sim time) or ``max_time_s`` passes (``plan_failed``); a mover touching the waiting vehicle is a
-contact (checked against the movers' interpolated outlines at the control rate). A planner that raises on a start it considers in collision
+starts at that sim time) or ``first_plan_wait_s`` passes (``plan_failed``); a mover touching the waiting vehicle
+is a contact (checked against the movers' interpolated outlines at the control rate). A planner that raises on a start it considers in collision
 counts as a failed call. Once the vehicle stands
 within the parking tolerance of the target it stops replanning (a parked vehicle does not start a new
 manoeuvre). Obstacles, movers and walls are detection only (`WorldConfig.solid_obstacles=False`) and the run does
@@ -81,6 +81,8 @@ class ClipRunConfig:
     """Spacing of the followed plan's samples checked against each frame (m)."""
     retry_period_s: float = 0.5
     """Least sim time between a failed planner call and the next call (s)."""
+    first_plan_wait_s: float = 5.0
+    """How long a vehicle whose first plan failed waits at its start, retrying every ``retry_period_s`` (s)."""
     track_window: int = 1
     """Frames the planner's detections are filtered over (`Clip.tracked_detections`); 1 = each frame's raw
     detections, as the paper's vehicle used them."""
@@ -88,6 +90,9 @@ class ClipRunConfig:
     def __post_init__(self) -> None:
         if self.replan not in REPLAN_MODES:
             raise ValueError(f"ClipRunConfig.replan: expected one of {REPLAN_MODES}, got {self.replan!r}")
+        if not 0.0 <= self.first_plan_wait_s < self.tracker.executor.max_time_s:
+            raise ValueError(f"ClipRunConfig.first_plan_wait_s: expected 0 <= wait < max_time_s "
+                             f"({self.tracker.executor.max_time_s}), got {self.first_plan_wait_s!r}")
         if self.track_window < 1:
             raise ValueError(f"ClipRunConfig.track_window: expected >= 1 frame, got {self.track_window!r}")
         if not (self.deviation_m > 0 and self.check_ds_m > 0):
@@ -315,7 +320,7 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
         parts.append(log)
     first = plan_at(start, 0.0, 0, clip.frame_scene(0, pose=start, track_window=config.track_window))
     driven, t0 = first, 0.0
-    while not driven.success and t0 + config.retry_period_s < tracker.executor.max_time_s - 1e-9:
+    while not driven.success and t0 + config.retry_period_s <= config.first_plan_wait_s + 1e-9:
         t0 += config.retry_period_s
         frame = min(int(round(t0 / dt)), clip.n_frames - 1)
         driven = plan_at(start, t0, frame, clip.frame_scene(frame, pose=start, track_window=config.track_window))
