@@ -122,6 +122,7 @@ def clip_rows(clip, planners: dict[str, Any], controller: str, rrd_dir: Path | N
                "reference_point_detail": run.reference_point_detail,
                "first_contact_object": object_of_geom(clip, ground, rec.contacts[0].geom) if rec.contacts else "",
                "plan_calls": len(run.calls), "plan_failures": sum(not c.success for c in run.calls),
+               "plan_rejected": sum(bool(c.rejected) for c in run.calls),
                "plan_time_median_ms": float(np.median(times)), "plan_time_first_ms": float(times[0]),
                "plan_time_max_ms": float(times.max()), "first_plan_success": int(first.success),
                "first_plan_reason": first.reason, "first_plan_L_m": L, "first_plan_reversals": rev,
@@ -257,7 +258,7 @@ def format_table(records: list[dict], names: list[str]) -> str:
             f"{_fmt(float(np.median([r['plan_time_first_ms'] for r in rows])))} | "
             f"{PAPER.get(name, '–').replace(' | ', ' / ')} |")
     lines += ["", "| Method | Failure reasons | Parked | Final error, footprint successes (m / °) | Cross-track RMS / "
-              "max (m) | Planner calls / failed per run | Sim / wall time per run (s) |", "|---|---|---|---|---|---|---|"]
+              "max (m) | Planner calls / failed / refused per run | Sim / wall time per run (s) |", "|---|---|---|---|---|---|---|"]
     for name in names:
         rows = [r for r in records if r["planner"] == name]
         ok = [r for r in rows if r["footprint_success"]]
@@ -268,7 +269,8 @@ def format_table(records: list[dict], names: list[str]) -> str:
             f"{_mean(r['parked'] for r in rows):.2f} | {_fmt(_mean(r['final_position_error_m'] for r in ok), 3)} / "
             f"{_fmt(_mean(r['final_heading_error_deg'] for r in ok), 1)} | "
             f"{_fmt(_mean(r['cross_track_rms_m'] for r in ran), 3)} / {_fmt(_mean(r['cross_track_max_m'] for r in ran), 3)} | "
-            f"{_mean(r['plan_calls'] for r in rows):.1f} / {_mean(r['plan_failures'] for r in rows):.1f} | "
+            f"{_mean(r['plan_calls'] for r in rows):.1f} / {_mean(r['plan_failures'] for r in rows):.1f} / "
+            f"{_mean(r['plan_rejected'] for r in rows):.1f} | "
             f"{_mean(r['sim_time_s'] for r in rows):.1f} / {_mean(r['wall_time_s'] for r in rows):.2f} |")
     lines += ["", "Succ.: executed footprint success (no chassis contact with a ground-truth object or wall, parked "
               "within 0.3 m / 10°) on all clips; in parentheses the reference-point success (parked, the executed "

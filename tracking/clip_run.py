@@ -14,7 +14,8 @@ and, by ``ClipRunConfig.replan``:
   a search planner this never settles (successive plans from a moving vehicle pick different manoeuvres: Hybrid
   A* on eval-1000001 switched plans 529 times and timed out after 60 s), hence the default.
 
-After a failed call the planner is called again no sooner than ``retry_period_s`` (0.5 s) later (a failing
+A successful plan the tracker cannot follow (`tracking.executor.plan_problem`: a steering curvature beyond κ_max)
+counts as a failed call and is not followed. After a failed call the planner is called again no sooner than ``retry_period_s`` (0.5 s) later (a failing
 rollout or search is the slowest call there is). When the very first call fails, the vehicle waits at rest at
 its start and retries every ``retry_period_s`` with the frame of that time until a plan succeeds (then the drive
 starts at that sim time) or ``first_plan_wait_s`` passes (``plan_failed``); a mover touching the waiting vehicle
@@ -48,7 +49,7 @@ from np_sim.frames import place
 from np_sim.plan import Plan
 from np_sim.scene import PolygonObstacle, Scene
 from tracking.config import ExecutorConfig, TrackerConfig, WorldConfig
-from tracking.executor import execute
+from tracking.executor import execute, plan_problem
 from tracking.movers import Mover, poses_at
 from tracking.record import Contact
 from tracking.observer import Observers, RunObserver, TrajectoryRecorder
@@ -204,6 +205,13 @@ class PlanCall:
     """The planner returned a successful plan."""
     plan_time_s: float
     """The plan's own planning time (s)."""
+    rejected: str = ""
+    """'' or why the tracker refused the successful plan (`tracking.executor.plan_problem`, e.g. 'steering_limit')."""
+
+    @property
+    def usable(self) -> bool:
+        """A successful plan the tracker can follow."""
+        return self.success and not self.rejected
 
 
 @dataclass
@@ -285,12 +293,14 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
             plan = planner.plan(scene, pose)
         except ConfigError as error:  # NeuralParker refuses a start in collision under its convention
             plan = Plan(start=np.asarray(pose, float), reason=f"refused: {error}")
-        calls.append(PlanCall(time_s=t, frame=frame, success=bool(plan.success), plan_time_s=plan.plan_time_s))
-        if not plan.success:
+        rejected = plan_problem(plan, tracker)[0] if plan.success else ""
+        calls.append(PlanCall(time_s=t, frame=frame, success=bool(plan.success), plan_time_s=plan.plan_time_s,
+                              rejected=rejected))
+        if not calls[-1].usable:
             wait_until[0] = t + config.retry_period_s
         if log is not None:
             log.log_detections(t, scene)
-        if plan.success:
+        if calls[-1].usable:
             followed[:] = [_FollowedPath(plan, config.check_ds_m)]
         return plan
 
@@ -320,7 +330,7 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
         parts.append(log)
     first = plan_at(start, 0.0, 0, clip.frame_scene(0, pose=start, track_window=config.track_window))
     driven, t0 = first, 0.0
-    while not driven.success and t0 + config.retry_period_s <= config.first_plan_wait_s + 1e-9:
+    while not calls[-1].usable and t0 + config.retry_period_s <= config.first_plan_wait_s + 1e-9:
         t0 += config.retry_period_s
         frame = min(int(round(t0 / dt)), clip.n_frames - 1)
         driven = plan_at(start, t0, frame, clip.frame_scene(frame, pose=start, track_window=config.track_window))
@@ -328,8 +338,8 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
         recorder.start_time_s = t0
     gt0 = clip.frame_scene(0, ground_truth=True)
     record = execute(ground.scene, driven, controller, replan=replan, config=tracker, observer=Observers(parts),
-                     world=world, start_time_s=t0 if driven.success else 0.0)
-    waiting = np.arange(0.0, t0, tracker.executor.control_dt_s) if driven.success else np.zeros(0)
+                     world=world, start_time_s=t0 if calls[-1].usable else 0.0)
+    waiting = np.arange(0.0, t0, tracker.executor.control_dt_s) if calls[-1].usable else np.zeros(0)
     if len(waiting):
         touches = _waiting_contacts(ground, start, waiting, tracker.vehicle)
         if touches:

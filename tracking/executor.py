@@ -153,6 +153,17 @@ def _segments(plan: Plan, config: TrackerConfig, start_speed_mps: float = 0.0) -
                               start_speed_mps)
 
 
+def plan_problem(plan: Plan, config: TrackerConfig) -> tuple[str, str]:
+    """('', '') when the tracker can follow ``plan``, else the (reason, detail) with which `execute` would refuse it.
+
+    Reasons: 'plan_failed', 'empty_plan', 'steering_limit' (a sampled steering curvature beyond κ_max by more than
+    ``ExecutorConfig.curvature_tolerance``; the connector's discrete check, paper eq:hermite-kappa with 100 samples,
+    can miss a sharper peak between its samples).
+    """
+    segments = _segments(plan, config) if plan.success else []
+    return _check_plan(plan, segments, config)
+
+
 def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = False,
             rerun_path: str | Path | None = None, *, replan: Replanner | None = None,
             config: TrackerConfig | None = None, observer: RunObserver | None = None,

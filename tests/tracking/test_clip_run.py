@@ -6,6 +6,7 @@ from np_sim.clips import load_clips
 from np_sim.plan import Plan
 from np_sim.planners import HybridAStar
 from tracking.clip_run import ClipRunConfig, run_clip
+from tracking.executor import plan_problem
 
 
 class FailingFirst:
@@ -43,3 +44,25 @@ def test_a_planner_that_never_succeeds_ends_as_plan_failed_after_the_wait():
     run = run_clip(clip, FailingFirst(10_000), config=config)
     assert run.record.reason == "plan_failed" and not run.parked
     assert [c.time_s for c in run.calls] == [0.0, 0.5, 1.0, 1.5, 2.0]
+
+
+class SharpFirst(FailingFirst):
+    """Hybrid A* (footprint) behind ``failures`` successful plans that steer at 1.5 κ_max (untrackable)."""
+
+    def plan(self, scene, start):
+        if self.failures:
+            self.failures -= 1
+            sharp = Plan(start=np.asarray(start, float), arcs=np.array([[1.5 * 0.68, 2.0]]), success=True)
+            assert plan_problem(sharp, ClipRunConfig().tracker)[0] == "steering_limit"
+            return sharp
+        return self.search.plan(scene, start)
+
+
+def test_a_plan_the_tracker_refuses_counts_as_a_failed_call_and_is_retried():
+    clip = next(c for c in load_clips("eval") if c.name == "eval-1000016")
+    run = run_clip(clip, SharpFirst(2))
+    assert [(c.success, c.rejected) for c in run.calls[:3]] == [(True, "steering_limit"), (True, "steering_limit"),
+                                                                 (True, "")]
+    assert not any(c.rejected for c in run.calls[3:])
+    assert run.footprint_success, run.record.detail
+    assert np.allclose(run.trajectory[run.trajectory[:, 0] < 1.0, 1:], clip.start)  # waited, not driven sharp
