@@ -9,7 +9,8 @@ and, by ``ClipRunConfig.replan``:
 
 * ``"on_invalid"`` (default): the planner replans from the simulated reference-point pose when the rest of the
   followed plan is no longer valid in this frame's scene (under the planner's own collision convention) or the
-  vehicle is more than ``deviation_m`` off it; the tracker follows the newest successful plan;
+  vehicle is more than ``deviation_m`` off it or stands at its end outside the parking tolerance (the executor
+  then holds the vehicle for up to ``ExecutorConfig.hold_max_s``); the tracker follows the newest successful plan;
 * ``"every_frame"``: the planner replans at every frame and the tracker always switches to the newest plan. With
   a search planner this never settles (successive plans from a moving vehicle pick different manoeuvres: Hybrid
   A* on eval-1000001 switched plans 529 times and timed out after 60 s), hence the default.
@@ -122,6 +123,11 @@ class _FollowedPath:
     def remaining(self) -> np.ndarray:
         """Poses from the progress index to the end."""
         return self.poses[self.index:]
+
+    @property
+    def at_end(self) -> bool:
+        """The progress index is at the last sample or the one before (the executor ends a segment 0.05 m short)."""
+        return self.index >= len(self.poses) - 2
 
 
 def planner_convention(planner) -> str:
@@ -304,7 +310,12 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
             followed[:] = [_FollowedPath(plan, config.check_ds_m)]
         return plan
 
+    previous_pose = [np.asarray(clip.start, float)]
+    rest_step_m = tracker.executor.rest_speed_mps * tracker.executor.replan_period_s
+
     def replan(pose: np.ndarray, t: float) -> Plan | None:
+        standing = math.hypot(pose[0] - previous_pose[0][0], pose[1] - previous_pose[0][1]) < rest_step_m
+        previous_pose[0] = np.array(pose, float)
         if (math.hypot(pose[0] - clip.target[0], pose[1] - clip.target[1]) <= tol_m
                 and abs(math.remainder(pose[2] - clip.target[2], 2.0 * math.pi)) <= tol_rad):
             return None  # parked: no new manoeuvre
@@ -314,9 +325,10 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
         scene = clip.frame_scene(frame, pose=pose, track_window=config.track_window)
         if config.replan == "on_invalid" and followed:
             path = followed[0]
-            if path.advance(pose) <= config.deviation_m and path_valid(scene, path.remaining(), convention,
-                                                                       tracker.vehicle):
-                return None  # the followed plan still holds
+            off = path.advance(pose)
+            if (off <= config.deviation_m and not (standing and path.at_end)
+                    and path_valid(scene, path.remaining(), convention, tracker.vehicle)):
+                return None  # the followed plan still holds (standing at its end short of the target: it does not)
         return plan_at(pose, t, frame, scene)
 
     start = np.asarray(clip.start, float)

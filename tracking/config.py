@@ -183,6 +183,9 @@ class ExecutorConfig:
     """Period of the replanning callback in replanning mode (s)."""
     max_time_s: float = 120.0
     """Timeout of a replanning run (s)."""
+    hold_max_s: float = 5.0
+    """Replanning mode: how long a vehicle that finished its plan short of the parking tolerance stands and waits
+    for a new plan before the run ends ('not_parked') (s)."""
     render_fps: float = 10.0
     """Rendered frames per second of sim time when rendering."""
     render_width: int = 320

@@ -13,6 +13,8 @@ profile speed (at least the creep speed until the segment end) with the PI speed
 path left is under the tolerance and the vehicle is at rest. Then ``mj_step`` runs the physics substeps and the
 chassis contacts are read. A run ends when the last segment ends (success if no contact and the final pose is
 within the parking tolerance of the scene target), at the first contact (``stop_on_contact``) or at the timeout.
+In replanning mode a vehicle that ends its plan outside the parking tolerance stands (brakes, holds its steering)
+and keeps calling the replanner for up to ``hold_max_s``; a new plan starts a corrective manoeuvre.
 """
 
 from __future__ import annotations
@@ -75,6 +77,7 @@ class _Loop:
         self.k = 0
         self.hint = 0
         self.aligning = True
+        self.holding = False
         self.lateral_sq, self.heading_sq, self.lateral_max, self.n_err = 0.0, 0.0, 0.0, 0
         self.length, self.reversals, self.direction = 0.0, 0, 0
         self.contacts: list[Contact] = []
@@ -82,7 +85,11 @@ class _Loop:
 
     def follow(self, segments: list[Segment], moving: bool) -> None:
         """Track ``segments`` from their start; without motion, align the steering first."""
-        self.segments, self.k, self.hint, self.aligning = segments, 0, 0, not moving
+        self.segments, self.k, self.hint, self.aligning, self.holding = segments, 0, 0, not moving, False
+
+    def hold(self) -> None:
+        """Stand at the end of the finished plan (projected on its last segment) until `follow` is called."""
+        self.k, self.holding = len(self.segments) - 1, True
 
     def step(self) -> bool:
         """One control step and its physics substeps; False once the last segment has ended."""
@@ -94,7 +101,9 @@ class _Loop:
         self.hint = proj.index
         steer_now = math.tan(world.steer_angle()) / self.config.vehicle.wheelbase_m
         state = TrackingState(pose=pose, speed_mps=speed, steer_curvature=steer_now, segment=seg, projection=proj)
-        if self.aligning:
+        if self.holding:
+            command, target, accel = self.steering(steer_now), 0.0, 0.0
+        elif self.aligning:
             command = self.steering(seg.steer_feedforward[0])
             target, accel = 0.0, 0.0
             wanted = self.steering.target_angle(seg.steer_feedforward[0])
@@ -233,7 +242,7 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
     else:
         t_max = ec.max_time_s
     plans_used, replans_failed, next_replan = 1, 0, loop.t + ec.replan_period_s
-    stop = ""
+    stop, hold_until = "", math.inf
     wall0 = time.perf_counter()
     while True:
         if replan is not None and loop.t >= next_replan - 1e-9:
@@ -245,12 +254,18 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
                 speed = abs(world.speed(world.pose()[2])) if new_segments[0].gear == moving_gear else 0.0
                 new_segments = _segments(new, config, speed)
                 loop.follow(new_segments, moving=speed > 0)
+                hold_until = math.inf
                 plans_used += 1
                 observers.on_plan(loop.t, new, new_segments)
             else:
                 replans_failed += 1
         if not loop.step():
-            break
+            if replan is None or _parked(world.pose(), scene.target, ec):
+                break
+            loop.hold()
+            hold_until = loop.t + ec.hold_max_s
+        if loop.t >= hold_until:
+            break  # no new plan while standing short of the target: judged below (not_parked)
         if loop.contacts and ec.stop_on_contact:
             stop = "contact"
             break
@@ -280,6 +295,12 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
         plans_used=plans_used, replans_failed=replans_failed, frames_rendered=observers.frames_rendered)
     observers.on_end(record)
     return record
+
+
+def _parked(pose: np.ndarray, target: np.ndarray, ec) -> bool:
+    """Within the parking tolerance of the target."""
+    err_m, err_rad = _pose_error(pose, target)
+    return err_m <= ec.goal_position_tol_m and err_rad <= math.radians(ec.goal_heading_tol_deg)
 
 
 def _pose_error(pose: np.ndarray, target: np.ndarray) -> tuple[float, float]:

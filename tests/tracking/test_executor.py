@@ -97,3 +97,28 @@ def test_replanning_follows_the_newest_plan():
     assert record.success, record.detail
     assert record.plans_used > 1 and len(calls) >= record.plans_used - 1
     assert calls[:2] == pytest.approx([0.5, 1.0])
+
+
+def test_a_vehicle_that_ends_its_plan_short_of_the_target_stands_and_takes_a_corrective_plan():
+    target = np.array([6.0, 0.0, 0.0])
+    first = plan_from_arcs([[0.0, 4.5]], start=(0.0, 0.0, 0.0))  # ends 1.5 m short
+    finished = []
+
+    def replan(pose, t):
+        if abs(pose[0] - 4.5) > 0.1:
+            return None  # keep following the first plan until it has ended
+        finished.append(t)
+        return plan_from_arcs([[0.0, target[0] - pose[0]]], start=pose)
+
+    config = dataclasses.replace(TrackerConfig(), executor=ExecutorConfig(replan_period_s=0.1, max_time_s=60.0))
+    record = execute(open_scene(target), first, replan=replan, config=config)
+    assert record.success, record.detail
+    assert record.plans_used >= 2 and finished
+
+    def never(pose, t):
+        return None
+
+    stuck = execute(open_scene(target), first, replan=never, config=config)
+    assert stuck.reason == "not_parked" and "1.5" in stuck.detail
+    alone = execute(open_scene(target), first, config=config)  # the plan's own end, no replanning
+    assert stuck.sim_time_s == pytest.approx(alone.sim_time_s + config.executor.hold_max_s, abs=0.05)
