@@ -59,9 +59,10 @@ PAPER = {"neuralparker": "0.60 (0.93) | 7.0 | 1.20 | 0.37", "np_guided_astar": "
 
 
 def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Path | None,
-                   search_margin_m: float = 0.0) -> dict[str, Any]:
+                   search_margin_m: float = 0.0, connector: str | None = None) -> dict[str, Any]:
     """One planner per name; NeuralParker and NP-Guided A* share the site policy of ``checkpoint``; Hybrid A* and
-    NP-Guided A*'s search plan for the footprint grown by ``search_margin_m`` on every side."""
+    NP-Guided A*'s search plan for the footprint grown by ``search_margin_m`` on every side; ``connector``
+    ('fixed' or 'ensemble') overrides the NeuralParker checkpoints' terminal connector."""
     unknown = [n for n in names if n not in PLANNERS]
     if unknown:
         raise ValueError(f"experiments.closed_loop: unknown planner(s) {unknown}; expected some of {list(PLANNERS)}")
@@ -80,7 +81,7 @@ def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Pat
                 f"or leave neuralparker and np_guided_astar out of --planners")
         from np_policy.planner import NeuralParkerPlanner
 
-        learned = NeuralParkerPlanner.from_checkpoint(checkpoint)
+        learned = NeuralParkerPlanner.from_checkpoint(checkpoint, connector)
     if "neuralparker_footprint" in names and not Path(footprint_checkpoint).exists():
         raise FileNotFoundError(
             f"experiments.closed_loop: the footprint-aware site checkpoint {footprint_checkpoint} does not exist; "
@@ -97,7 +98,7 @@ def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Pat
         else:  # neuralparker_footprint
             from np_policy.planner import NeuralParkerPlanner
 
-            planners[name] = NeuralParkerPlanner.from_checkpoint(footprint_checkpoint)
+            planners[name] = NeuralParkerPlanner.from_checkpoint(footprint_checkpoint, connector)
     return planners
 
 
@@ -138,11 +139,11 @@ _WORKER: dict[str, Any] = {}
 """Per-process state of the worker pool: clips and planners, built once per process."""
 
 
-def _init_worker(names, checkpoint, footprint_checkpoint, search_margin_m) -> None:
+def _init_worker(names, checkpoint, footprint_checkpoint, search_margin_m, connector) -> None:
     from np_sim.clips import load_clips
 
     _WORKER["clips"] = load_clips("eval")
-    _WORKER["planners"] = build_planners(names, checkpoint, footprint_checkpoint, search_margin_m)
+    _WORKER["planners"] = build_planners(names, checkpoint, footprint_checkpoint, search_margin_m, connector)
 
 
 def _work(args) -> list[dict]:
@@ -155,12 +156,12 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
         controller: str = "lqr", rrd: bool = True, progress: bool = True,
         clip_names: list[str] | None = None, replan: str = "on_invalid",
         footprint_checkpoint: Path = FOOTPRINT_CHECKPOINT, track_window: int = 1,
-        search_margin_m: float = 0.0) -> dict[str, Any]:
+        search_margin_m: float = 0.0, connector: str | None = None) -> dict[str, Any]:
     """Run the clips × planners; returns records, table text, folder and notes (see the module docstring).
     ``planners=None`` runs all of them, leaving out the footprint-aware NeuralParker (with a note) when
     ``footprint_checkpoint`` is missing; a planner named explicitly must have its checkpoint. ``track_window``
     and ``search_margin_m`` are the perception filter and the searches' safety margin (both off by default,
-    as on the paper's vehicle)."""
+    as on the paper's vehicle); ``connector`` overrides NeuralParker's terminal connector."""
     from tracking.clip_run import ClipRunConfig
 
     from np_sim.clips import load_clips
@@ -177,7 +178,7 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
         names.remove("neuralparker_footprint")
         notes.append(f"NeuralParker (footprint): {footprint} is missing, row left out.")
     clip_config = ClipRunConfig(replan=replan, track_window=track_window)
-    build_planners(names, checkpoint, footprint, search_margin_m)  # fail fast on a bad setting, before any work
+    build_planners(names, checkpoint, footprint, search_margin_m, connector)  # fail fast on a bad setting, before any work
     clips = load_clips("eval")
     if clip_names:
         known = {c.name: k for k, c in enumerate(clips)}
@@ -194,13 +195,13 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
     bar = tqdm(total=len(jobs) * len(names), desc="clips × planners in MuJoCo", unit="run", disable=not progress)
     results: list[list[dict]] = []
     if workers == 1:
-        _init_worker(names, checkpoint, footprint, search_margin_m)
+        _init_worker(names, checkpoint, footprint, search_margin_m, connector)
         for job in jobs:
             results.append(_work(job))
             bar.update(len(names))
     else:
         with ProcessPoolExecutor(workers, initializer=_init_worker,
-                                 initargs=(names, checkpoint, footprint, search_margin_m)) as pool:
+                                 initargs=(names, checkpoint, footprint, search_margin_m, connector)) as pool:
             for rows in pool.map(_work, jobs):  # in clip order, so the records do not depend on the workers
                 results.append(rows)
                 bar.update(len(names))
@@ -217,7 +218,8 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
         "footprint_checkpoint": str(footprint) if "neuralparker_footprint" in names else None,
         "search_convention": SEARCH_CONVENTION, "clips": [clips[k].name for k in indices], "controller": controller,
         "render_clips": render_clips if render else 0, "workers": workers, "wall_time_s": wall,
-        "search_margin_m": search_margin_m, "clip_run": _clip_run_config(clip_config), "git_commit": git_commit()},
+        "search_margin_m": search_margin_m, "connector": connector, "clip_run": _clip_run_config(clip_config),
+        "git_commit": git_commit()},
         indent=2, default=str))
     return {"records": records, "table": table, "folder": folder, "figure": figure, "rrd": merged,
             "wall_time_s": wall}
@@ -350,11 +352,14 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--search-margin", type=float, default=0.0, metavar="M",
                         help="Hybrid A* and NP-Guided A*'s search plan for the footprint grown by M metres on every "
                              "side (default 0)")
+    parser.add_argument("--connector", choices=("fixed", "ensemble"), default=None,
+                        help="NeuralParker's terminal connector (default: the checkpoint's, the site's fixed nine "
+                             "candidates; ensemble = the paper's 81-candidate ensemble, an evaluation-only swap)")
     args = parser.parse_args(argv)
     result = run(args.planners, args.checkpoint, args.clips_limit, args.render_clips, not args.no_render, args.out,
                  args.workers, args.controller, clip_names=args.clip_names, replan=args.replan,
                  footprint_checkpoint=args.footprint_checkpoint, track_window=args.track_window,
-                 search_margin_m=args.search_margin)
+                 search_margin_m=args.search_margin, connector=args.connector)
     folder = result["folder"]
     print(result["table"])
     print(f"\nwall time {result['wall_time_s']:.0f} s; results in {folder}/: records.csv, records.json, table.md, "

@@ -14,7 +14,6 @@ and ``records.json`` (one row per episode), ``table.md`` and ``config.json`` int
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 from pathlib import Path
 from typing import Any
@@ -36,11 +35,7 @@ def evaluate(benchmark: str, checkpoints: list[Path], connector: str | None = No
     episodes = [(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])][:limit]
     records: list[dict[str, Any]] = []
     for seed_index, path in enumerate(checkpoints):
-        planner = NeuralParkerPlanner.from_checkpoint(path)
-        if connector is not None:
-            env = planner.config.env
-            env = dataclasses.replace(env, connector=dataclasses.replace(env.connector, mode=connector))
-            planner.config = dataclasses.replace(planner.config, env=env)
+        planner = NeuralParkerPlanner.from_checkpoint(path, connector)
         for k, j in tqdm(episodes, desc=f"{Path(path).name}", unit="ep", disable=not progress):
             plan = planner.plan(scenes[k], starts[k, j])
             L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))

@@ -8,6 +8,8 @@ checks, the heading gate and the Hermite selection follow exactly the env's rule
 
 from __future__ import annotations
 
+import dataclasses
+
 import time
 import weakref
 from pathlib import Path
@@ -43,10 +45,17 @@ class NeuralParkerPlanner:
         return env
 
     @classmethod
-    def from_checkpoint(cls, path: str | Path) -> "NeuralParkerPlanner":
-        """Rebuild the network and env config stored in a checkpoint (CheckpointError on a bad file)."""
+    def from_checkpoint(cls, path: str | Path, connector: str | None = None) -> "NeuralParkerPlanner":
+        """Rebuild the network and env config stored in a checkpoint (CheckpointError on a bad file).
+
+        ``connector`` ('fixed' or 'ensemble') replaces the checkpoint's terminal connector (paper §III-E: the
+        81-candidate ensemble used at evaluation only); None keeps it."""
         payload = load_checkpoint(path)
         config = TrainConfig.from_dict(payload["config"])
+        if connector is not None:
+            env = config.env
+            env = dataclasses.replace(env, connector=dataclasses.replace(env.connector, mode=connector))
+            config = dataclasses.replace(config, env=env)
         model = ActorCritic(config.env.observation, config.network)
         model.load_state_dict(payload["model"])
         return cls(model, config)

@@ -68,3 +68,17 @@ def test_evaluate_cli_writes_records_and_table(planner, tmp_path):
     assert "| NeuralParker (fixed) |" in result["table"]
     # two identical seeds: the sample SD over seeds is zero
     assert "± 0.000" in result["table"].splitlines()[-1]
+
+
+def test_the_connector_can_be_swapped_at_load_and_a_bad_mode_is_named(planner, tmp_path):
+    from np_policy.checkpoint import save_checkpoint
+    from np_sim.errors import ConfigError
+
+    ckpt = tmp_path / "ckpt.pt"
+    save_checkpoint(ckpt, {"model": planner.model.state_dict(), "config": planner.config.to_dict()})
+    assert planner.config.env.connector.mode == "ensemble"
+    fixed = NeuralParkerPlanner.from_checkpoint(ckpt, "fixed")
+    assert fixed.config.env.connector.mode == "fixed"
+    assert fixed.config.env.connector.n_candidates < planner.config.env.connector.n_candidates
+    with pytest.raises(ConfigError, match="ConnectorConfig.mode"):
+        NeuralParkerPlanner.from_checkpoint(ckpt, "spline")
