@@ -33,13 +33,15 @@ from np_policy.ppo import RunningMeanStd, compute_targets, make_optimizer, ppo_u
 from np_sim.config import EnvConfig, config_from_dict
 from np_sim.curriculum import CurriculumSchedule, CurriculumStartSampler
 from np_sim.env import ParkingVectorEnv
-from np_sim.clips import training_pool
+from np_sim.clips import cached_training_pool
 from np_sim.errors import ConfigError
 from np_sim.scene import Scene
 from np_sim.site import SITE_OBSERVATION
 from np_sim.starts import UniformStartSampler, fixed_start_sampler
 
 BENCHMARKS = ("factorial", "topology", "examples", "site")
+SITE_POOL_FILE = "site_pool.pkl"
+"""The site run's reset pool, kept in the run folder so --resume does not draw it again (not committed)."""
 
 
 @dataclass(frozen=True)
@@ -158,8 +160,9 @@ class Trainer:
             torch.set_num_threads(config.torch_threads)
         torch.manual_seed(config.seed)
         if config.benchmark == "site":
-            self.scenes, starts = training_pool(config.site_pool, config.seed, observation=config.env.observation,
-                                                vehicle=config.env.vehicle, progress=True)
+            self.scenes, starts = cached_training_pool(self.out / SITE_POOL_FILE, config.site_pool, config.seed,
+                                                       observation=config.env.observation,
+                                                       vehicle=config.env.vehicle, progress=True)
             self.sampler = PairedStartSampler(starts)
             select_sampler = fixed_start_sampler(starts)
         else:

@@ -1199,6 +1199,36 @@ def training_pool(n: int, seed: int, *, observation=SITE_OBSERVATION, vehicle: V
     return scenes, starts
 
 
+def cached_training_pool(path: str | Path, n: int, seed: int, *, observation=SITE_OBSERVATION,
+                         vehicle: VehicleSpec | None = None, clips: Sequence[Clip] | None = None,
+                         progress: bool = False) -> tuple[list[Scene], np.ndarray]:
+    """`training_pool`, kept in the pickle file ``path`` (a training run's folder): a file drawn with the same
+    ``n``, ``seed``, observation and vehicle is read back (a resumed run trains on exactly the pool it started
+    with, without the ~5 min of drawing it again); a missing, unreadable or differently drawn file is redrawn and
+    rewritten. ``clips`` given explicitly are not part of the key: pass them only with a fresh path."""
+    import dataclasses
+    import pickle
+
+    path = Path(path)
+    key = {"format": 1, "n": n, "seed": seed, "observation": dataclasses.asdict(observation),
+           "vehicle": dataclasses.asdict(vehicle or VehicleSpec())}
+    if path.exists():
+        try:
+            with path.open("rb") as f:
+                payload = pickle.load(f)
+            if payload.get("key") == key:
+                return payload["scenes"], payload["starts"]
+        except (OSError, EOFError, pickle.UnpicklingError, AttributeError, TypeError):
+            pass  # unreadable: drawn again below
+    scenes, starts = training_pool(n, seed, observation=observation, vehicle=vehicle, clips=clips, progress=progress)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    with tmp.open("wb") as f:
+        pickle.dump({"key": key, "scenes": scenes, "starts": starts}, f, protocol=pickle.HIGHEST_PROTOCOL)
+    tmp.replace(path)
+    return scenes, starts
+
+
 # ---------------------------------------------------------------------- summary, figure, CLI
 
 
