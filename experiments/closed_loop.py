@@ -34,6 +34,7 @@ import subprocess
 import sys
 import time
 from collections import Counter
+import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -200,7 +201,9 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
             results.append(_work(job))
             bar.update(len(names))
     else:
-        with ProcessPoolExecutor(workers, initializer=_init_worker,
+        # spawn, not fork: the parent has torch's thread pool up (build_planners above), and a forked child can
+        # deadlock on its locks (it did: --workers 2 hung with idle workers)
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init_worker,
                                  initargs=(names, checkpoint, footprint, search_margin_m, connector)) as pool:
             for rows in pool.map(_work, jobs):  # in clip order, so the records do not depend on the workers
                 results.append(rows)

@@ -69,3 +69,12 @@ def test_perception_filter_and_search_margin_reach_the_run(tmp_path):
     assert config["search_margin_m"] == 0.15 and config["clip_run"]["track_window"] == 5
     row = next(csv.DictReader((out / "records.csv").open()))
     assert row["footprint_success"] == "1", row["detail"]
+
+
+def test_two_workers_give_the_records_of_one(tmp_path, site_checkpoint):
+    args = ["--clips", "--clip-names", KNOWN_FEASIBLE, "eval-1000009", "--planners", "neuralparker", "hybrid_astar",
+            "--checkpoint", str(site_checkpoint), "--no-render"]
+    one = main(args + ["--out", str(tmp_path / "one")])["records"]
+    two = main(args + ["--out", str(tmp_path / "two"), "--workers", "2"])["records"]  # hung with fork before
+    keys = ("clip", "planner", "footprint_success", "reason", "plan_calls", "path_length_m", "final_position_error_m")
+    assert [[r[k] for k in keys] for r in two] == [[r[k] for k in keys] for r in one]
