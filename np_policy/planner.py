@@ -9,7 +9,6 @@ checks, the heading gate and the Hermite selection follow exactly the env's rule
 from __future__ import annotations
 
 import dataclasses
-
 import time
 import weakref
 from pathlib import Path

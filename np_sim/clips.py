@@ -65,6 +65,7 @@ import gzip
 import io
 import json
 import math
+import pickle
 import time
 from dataclasses import asdict, dataclass, field
 from functools import lru_cache
@@ -1206,12 +1207,9 @@ def cached_training_pool(path: str | Path, n: int, seed: int, *, observation=SIT
     ``n``, ``seed``, observation and vehicle is read back (a resumed run trains on exactly the pool it started
     with, without the ~5 min of drawing it again); a missing, unreadable or differently drawn file is redrawn and
     rewritten. ``clips`` given explicitly are not part of the key: pass them only with a fresh path."""
-    import dataclasses
-    import pickle
-
     path = Path(path)
-    key = {"format": 1, "n": n, "seed": seed, "observation": dataclasses.asdict(observation),
-           "vehicle": dataclasses.asdict(vehicle or VehicleSpec())}
+    key = {"format": 1, "n": n, "seed": seed, "observation": asdict(observation),
+           "vehicle": asdict(vehicle or VehicleSpec())}
     if path.exists():
         try:
             with path.open("rb") as f:

@@ -16,8 +16,8 @@ and, by ``ClipRunConfig.replan``:
   A* on eval-1000001 switched plans 529 times and timed out after 60 s), hence the default.
 
 A successful plan the tracker cannot follow (`tracking.executor.plan_problem`: a steering curvature beyond κ_max)
-counts as a failed call and is not followed. After a failed call the planner is called again no sooner than ``retry_period_s`` (0.5 s) later (a failing
-rollout or search is the slowest call there is). When the very first call fails, the vehicle waits at rest at
+counts as a failed call and is not followed. After a failed call the planner is called again no sooner than
+``retry_period_s`` (0.5 s) later (a failing rollout or search is the slowest call there is). When the very first call fails, the vehicle waits at rest at
 its start and retries every ``retry_period_s`` with the frame of that time until a plan succeeds (then the drive
 starts at that sim time) or ``first_plan_wait_s`` passes (``plan_failed``); a mover touching the waiting vehicle
 is a contact (checked against the movers' interpolated outlines at the control rate). A planner that raises on a start it considers in collision
@@ -50,7 +50,7 @@ from np_sim.frames import place
 from np_sim.plan import Plan
 from np_sim.scene import PolygonObstacle, Scene
 from tracking.config import ExecutorConfig, TrackerConfig, WorldConfig
-from tracking.executor import execute, plan_problem
+from tracking.executor import execute, parked, plan_problem
 from tracking.movers import Mover, poses_at
 from tracking.record import Contact
 from tracking.observer import Observers, RunObserver, TrajectoryRecorder
@@ -288,7 +288,6 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
     ground = clip_world(clip)
     dt = clip.frame_dt_s
     convention = planner_convention(planner)
-    tol_m, tol_rad = tracker.executor.goal_position_tol_m, math.radians(tracker.executor.goal_heading_tol_deg)
     calls: list[PlanCall] = []
     log = None
     followed: list[_FollowedPath] = []
@@ -316,9 +315,8 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
     def replan(pose: np.ndarray, t: float) -> Plan | None:
         standing = math.hypot(pose[0] - previous_pose[0][0], pose[1] - previous_pose[0][1]) < rest_step_m
         previous_pose[0] = np.array(pose, float)
-        if (math.hypot(pose[0] - clip.target[0], pose[1] - clip.target[1]) <= tol_m
-                and abs(math.remainder(pose[2] - clip.target[2], 2.0 * math.pi)) <= tol_rad):
-            return None  # parked: no new manoeuvre
+        if parked(pose, clip.target, tracker.executor):
+            return None  # a parked vehicle starts no new manoeuvre
         if t < wait_until[0] - 1e-9:
             return None  # shortly after a failed call
         frame = min(int(round(t / dt)), clip.n_frames - 1)
@@ -361,11 +359,11 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
     if rerun_path is not None and record.reason in ("plan_failed", "empty_plan", "steering_limit",
                                                     "start_in_collision"):
         log.finish_unrun(record)  # the executor returned before the loop started: no hooks were called
-    err_m, err_rad = record.final_error
-    parked = record.reason in ("", "contact") and err_m <= tol_m and err_rad <= tol_rad
+    stands_parked = record.reason in ("", "contact") and parked(record.final_pose, clip.target, tracker.executor)
     trajectory = recorder.array() if recorder.rows else np.array([[0.0, *start]])
     if len(waiting):
         trajectory = np.vstack([np.column_stack([waiting, np.tile(start, (len(waiting), 1))]), trajectory])
-    return ClipRun(record=record, first_plan=first, calls=calls, trajectory=trajectory, parked=parked,
-                   reference_point_detail=reference_point_violation(clip, ground, trajectory) if parked else "",
+    return ClipRun(record=record, first_plan=first, calls=calls, trajectory=trajectory,
+                   parked=stands_parked,
+                   reference_point_detail=reference_point_violation(clip, ground, trajectory) if stands_parked else "",
                    first_plan_valid=validate_plan(gt0, first))

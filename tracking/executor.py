@@ -30,7 +30,7 @@ import numpy as np
 from np_sim.collision import path_valid
 from np_sim.plan import Plan
 from np_sim.scene import Scene
-from tracking.config import TrackerConfig
+from tracking.config import ExecutorConfig, TrackerConfig
 from tracking.controllers import SpeedController, SteeringLimiter, make_lateral
 from tracking.controllers.base import TrackingState
 from tracking.errors import TrackingError
@@ -260,7 +260,7 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
             else:
                 replans_failed += 1
         if not loop.step():
-            if replan is None or _parked(world.pose(), scene.target, ec):
+            if replan is None or parked(world.pose(), scene.target, ec):
                 break
             loop.hold()
             hold_until = loop.t + ec.hold_max_s
@@ -279,7 +279,7 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
         reason = stop
     elif loop.contacts:
         reason = "contact"
-    elif err[0] > ec.goal_position_tol_m or err[1] > math.radians(ec.goal_heading_tol_deg):
+    elif not _within_tolerance(err, ec):
         reason = "not_parked"
     detail = {"contact": f"chassis touched {loop.contacts[0].geom} at t = {loop.contacts[0].time_s:.2f} s"
               if loop.contacts else "",
@@ -297,10 +297,13 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
     return record
 
 
-def _parked(pose: np.ndarray, target: np.ndarray, ec) -> bool:
-    """Within the parking tolerance of the target."""
-    err_m, err_rad = _pose_error(pose, target)
-    return err_m <= ec.goal_position_tol_m and err_rad <= math.radians(ec.goal_heading_tol_deg)
+def parked(pose: np.ndarray, target: np.ndarray, ec: ExecutorConfig) -> bool:
+    """``pose`` is within the parking tolerance of ``target`` (``goal_position_tol_m`` / ``goal_heading_tol_deg``)."""
+    return _within_tolerance(_pose_error(pose, target), ec)
+
+
+def _within_tolerance(error: tuple[float, float], ec: ExecutorConfig) -> bool:
+    return error[0] <= ec.goal_position_tol_m and error[1] <= math.radians(ec.goal_heading_tol_deg)
 
 
 def _pose_error(pose: np.ndarray, target: np.ndarray) -> tuple[float, float]:
