@@ -42,7 +42,8 @@ from tracking.reference import Segment, reference_segments
 from tracking.world import World, build_world
 
 Replanner = Callable[[np.ndarray, float], "Plan | None"]
-"""``replan(pose, t) -> Plan | None``: a new plan from the vehicle's reference-point pose at sim time t, or None."""
+"""``replan(pose, t) -> Plan | None``: a new plan from the vehicle's reference-point pose at sim time t, or None when
+no new plan is needed (not counted as a failed replan)."""
 
 
 def _check_plan(plan: Plan, segments: list[Segment], config: TrackerConfig) -> tuple[str, str]:
@@ -257,7 +258,7 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
                 hold_until = math.inf
                 plans_used += 1
                 observers.on_plan(loop.t, new, new_segments)
-            else:
+            elif new is not None:  # None: the replanner saw no need for a new plan
                 replans_failed += 1
         if not loop.step():
             if replan is None or parked(world.pose(), scene.target, ec):

@@ -60,7 +60,7 @@ class ExecutionRecord:
     plans_used: int = 0
     """Plans followed (1 without replanning)."""
     replans_failed: int = 0
-    """Replanning calls that returned no usable plan."""
+    """Replanning calls that returned a failed or untrackable plan (a replanner returning None is not counted)."""
     frames_rendered: int = 0
     """Off-screen frames rendered."""
 

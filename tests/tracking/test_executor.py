@@ -120,5 +120,13 @@ def test_a_vehicle_that_ends_its_plan_short_of_the_target_stands_and_takes_a_cor
 
     stuck = execute(open_scene(target), first, replan=never, config=config)
     assert stuck.reason == "not_parked" and "1.5" in stuck.detail
+    assert stuck.replans_failed == 0  # None means "no new plan needed", not a failed call
+
+    def failing(pose, t):
+        return Plan(start=np.asarray(pose, float), reason="no path")
+
+    refused = execute(open_scene(target), first, replan=failing, config=config)
+    assert refused.reason == "not_parked" and refused.plans_used == 1
+    assert refused.replans_failed == pytest.approx(refused.sim_time_s / 0.1, abs=1)
     alone = execute(open_scene(target), first, config=config)  # the plan's own end, no replanning
     assert stuck.sim_time_s == pytest.approx(alone.sim_time_s + config.executor.hold_max_s, abs=0.05)
