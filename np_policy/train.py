@@ -323,14 +323,14 @@ class Trainer:
                 "env_steps": self.env_steps, "init_checkpoint": self.init_checkpoint}
 
 
-def _plot_curves(rows: list[dict[str, Any]], path: Path) -> None:
+def _plot_curves(rows: list[dict[str, Any]], path: Path, selection_episodes: int) -> None:
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(10, 3.2))
     epochs = [r["epoch"] for r in rows]
     for i, (key, label) in enumerate([("train_return", "mean episode return (train)"),
                                       ("train_success", "success rate (train)"),
-                                      ("selection_reward", "selection reward (32 full-range episodes)")]):
+                                      ("selection_reward", f"selection reward ({selection_episodes} full-range episodes)")]):
         ax = fig.add_subplot(1, 3, i + 1)
         ax.plot(epochs, [r[key] for r in rows], marker=".")
         ax.set_xlabel("epoch")
@@ -393,7 +393,7 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
             save_checkpoint(out / "best.pt", trainer.checkpoint_payload(selection))
         if trainer.epoch % ppo.snapshot_every_epochs == 0 or trainer.epoch == last:
             save_checkpoint(out / "snapshot.pt", trainer.state())
-        _plot_curves(rows, out / "curves.png")
+        _plot_curves(rows, out / "curves.png", ppo.selection_episodes)
         bar.set_postfix(steps_s=f"{row['steps_per_s']:,.0f}", ret=f"{row['train_return']:.0f}",
                         succ=f"{row['train_success']:.2f}", cur=f"{row['curriculum_fraction']:.2f}")
     return rows
