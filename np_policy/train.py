@@ -328,9 +328,9 @@ def _plot_curves(rows: list[dict[str, Any]], path: Path, selection_episodes: int
 
     fig = Figure(figsize=(10, 3.2))
     epochs = [r["epoch"] for r in rows]
-    for i, (key, label) in enumerate([("train_return", "mean episode return (train)"),
-                                      ("train_success", "success rate (train)"),
-                                      ("selection_reward", f"selection reward ({selection_episodes} full-range episodes)")]):
+    panels = [("train_return", "mean episode return (train)"), ("train_success", "success rate (train)"),
+              ("selection_reward", f"selection reward ({selection_episodes} full-range episodes)")]
+    for i, (key, label) in enumerate(panels):
         ax = fig.add_subplot(1, 3, i + 1)
         ax.plot(epochs, [r[key] for r in rows], marker=".")
         ax.set_xlabel("epoch")

@@ -16,13 +16,13 @@ and, by ``ClipRunConfig.replan``:
   A* on eval-1000001 switched plans 529 times and timed out after 60 s), hence the default.
 
 A successful plan the tracker cannot follow (`tracking.executor.plan_problem`: a steering curvature beyond κ_max)
-counts as a failed call and is not followed. After a failed call the planner is called again no sooner than
-``retry_period_s`` (0.5 s) later (a failing rollout or search is the slowest call there is). When the very first call fails, the vehicle waits at rest at
-its start and retries every ``retry_period_s`` with the frame of that time until a plan succeeds (then the drive
-starts at that sim time) or ``first_plan_wait_s`` passes (``plan_failed``); a mover touching the waiting vehicle
-is a contact (checked against the movers' interpolated outlines at the control rate). A planner that raises on a start it considers in collision
-counts as a failed call. Once the vehicle stands
-within the parking tolerance of the target it stops replanning (a parked vehicle does not start a new
+counts as a failed call and is not followed, and so does a planner that raises on a start it considers in
+collision. After a failed call the planner is called again no sooner than ``retry_period_s`` (0.5 s) later (a
+failing rollout or search is the slowest call there is). When the very first call fails, the vehicle waits at
+rest at its start and retries every ``retry_period_s`` with the frame of that time until a plan succeeds (then the
+drive starts at that sim time) or ``first_plan_wait_s`` passes (``plan_failed``); a mover touching the waiting
+vehicle is a contact (checked against the movers' interpolated outlines at the control rate). Once the vehicle
+stands within the parking tolerance of the target it stops replanning (a parked vehicle does not start a new
 manoeuvre). Obstacles, movers and walls are detection only (`WorldConfig.solid_obstacles=False`) and the run does
 not stop at a touch, so one run gives both verdicts:
 
