@@ -3,7 +3,7 @@ Table ``tab:realworld``, App. C, Fig. ``fig:searchtime``; SPEC §8).
 
 ``python -m experiments.closed_loop --clips [--clips-limit N | --clip-names NAME ...] [--planners neuralparker
 neuralparker_footprint np_guided_astar hybrid_astar] [--checkpoint PATH] [--footprint-checkpoint PATH] [--no-render]
-[--render-clips K] [--out DIR] [--workers N] [--controller lqr]``
+[--render-clips K] [--out DIR] [--workers N] [--controller lqr] [--footprint-samples N]``
 
 For every evaluation clip and planner, `tracking.clip_run.run_clip` starts the MuJoCo vehicle at the clip's start
 pose in the clip's ground truth (static objects, moving pedestrians and carts, the site boundary as walls), plans
@@ -13,8 +13,9 @@ records both verdicts: **footprint success** (no chassis contact with a ground-t
 0.3 m / 10°) and **reference-point success** (parked, the executed reference point never inside a ground-truth
 object nor outside the boundary). Planners: NeuralParker (the site checkpoint, paper-faithful reference-point
 training), "NeuralParker (footprint)" (``checkpoints/site_np_footprint.pt``, trained under the footprint
-convention; by default its row is left out with a note when the file is missing), NP-Guided A* and Hybrid A* (both
-searching under the footprint convention).
+convention, playing the best of its mean rollout and ``--footprint-samples`` seeded sampled rollouts,
+`np_policy.sampling`; by default its row is left out with a note when the file is missing), NP-Guided A* and
+Hybrid A* (both searching under the footprint convention).
 
 The table is the ``tab:realworld`` analogue — footprint success with reference-point success in parentheses, L
 and reversals executed on each method's own footprint successes, median plan time over all calls — plus
@@ -36,6 +37,7 @@ import sys
 import time
 from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -54,39 +56,59 @@ FOOTPRINT_CHECKPOINT = Path("checkpoints/site_np_footprint.pt")
 """The shipped footprint-aware site checkpoint."""
 SEARCH_CONVENTION = "footprint"
 """Collision convention of Hybrid A* and of NP-Guided A*'s search (the paper validates with the footprint)."""
+FOOTPRINT_SAMPLES = 32
+"""Default sampled rollouts of NeuralParker (footprint), chosen on 94 difficult training clips (0.73 with 16,
+0.81 with 32, 0.62 with none), not on the held-out ones."""
 PAPER = {"neuralparker": "0.60 (0.93) | 7.0 | 1.20 | 0.37", "np_guided_astar": "0.72 | 7.7 | 1.17 | 4.24",
          "hybrid_astar": "0.67 | 7.2 | 1.13 | 5.26"}
 """Table tab:realworld (real vehicle, C++ plan times): succ. | L | Rev. | plan time (ms)."""
 
 
-def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Path | None,
-                   search_margin_m: float = 0.0, connector: str | None = None) -> dict[str, Any]:
-    """One planner per name; NeuralParker and NP-Guided A* share the site policy of ``checkpoint``; Hybrid A* and
-    NP-Guided A*'s search plan for the footprint grown by ``search_margin_m`` on every side; ``connector``
-    ('fixed' or 'ensemble') overrides the NeuralParker checkpoints' terminal connector."""
+@dataclass(frozen=True)
+class PlannerSettings:
+    """Which checkpoints the planners load and how they plan (the command line's planner options)."""
+
+    checkpoint: Path = DEFAULT_CHECKPOINT
+    """Paper-faithful site checkpoint (NeuralParker and NP-Guided A*'s policy stage)."""
+    footprint_checkpoint: Path = FOOTPRINT_CHECKPOINT
+    """Footprint-aware site checkpoint (NeuralParker (footprint))."""
+    search_margin_m: float = 0.0
+    """Hybrid A* and NP-Guided A*'s search plan for the footprint grown by this on every side (m)."""
+    connector: str | None = None
+    """'fixed' or 'ensemble' overrides the NeuralParker checkpoints' terminal connector; None keeps it."""
+    footprint_samples: int = FOOTPRINT_SAMPLES
+    """NeuralParker (footprint) plays the best of its mean rollout and this many sampled rollouts
+    (`np_policy.sampling`); 0 = the paper's mean-action planner."""
+
+
+def build_planners(names: list[str], settings: PlannerSettings) -> dict[str, Any]:
+    """One planner per name (see `PlannerSettings`); NeuralParker and NP-Guided A* share the paper-faithful site
+    policy."""
     unknown = [n for n in names if n not in PLANNERS]
     if unknown:
         raise ValueError(f"experiments.closed_loop: unknown planner(s) {unknown}; expected some of {list(PLANNERS)}")
+    if settings.footprint_samples < 0:
+        raise ValueError(f"--footprint-samples: expected >= 0, got {settings.footprint_samples}")
     from np_sim.planners import HybridAStar, HybridAStarConfig
     from np_sim.vehicle import VehicleSpec
 
-    search = HybridAStarConfig(vehicle=VehicleSpec().inflated(search_margin_m))
+    search = HybridAStarConfig(vehicle=VehicleSpec().inflated(settings.search_margin_m))
 
     planners: dict[str, Any] = {}
     learned = None
     if {"neuralparker", "np_guided_astar"} & set(names):
-        if not Path(checkpoint).exists():
+        if not Path(settings.checkpoint).exists():
             raise FileNotFoundError(
-                f"experiments.closed_loop: the site NeuralParker checkpoint {checkpoint} does not exist; pass "
-                f"--checkpoint PATH (a site-configuration checkpoint, e.g. checkpoints/runs/site_np_seed0/best.pt) "
+                f"experiments.closed_loop: the site NeuralParker checkpoint {settings.checkpoint} does not exist; "
+                f"pass --checkpoint PATH (a site-configuration checkpoint, e.g. checkpoints/runs/site_np_seed0/best.pt) "
                 f"or leave neuralparker and np_guided_astar out of --planners")
         from np_policy.planner import NeuralParkerPlanner
 
-        learned = NeuralParkerPlanner.from_checkpoint(checkpoint, connector)
-    if "neuralparker_footprint" in names and not Path(footprint_checkpoint).exists():
+        learned = NeuralParkerPlanner.from_checkpoint(settings.checkpoint, settings.connector)
+    if "neuralparker_footprint" in names and not Path(settings.footprint_checkpoint).exists():
         raise FileNotFoundError(
-            f"experiments.closed_loop: the footprint-aware site checkpoint {footprint_checkpoint} does not exist; "
-            f"pass --footprint-checkpoint PATH or leave neuralparker_footprint out of --planners")
+            f"experiments.closed_loop: the footprint-aware site checkpoint {settings.footprint_checkpoint} does not "
+            f"exist; pass --footprint-checkpoint PATH or leave neuralparker_footprint out of --planners")
     for name in names:
         if name == "hybrid_astar":
             planners[name] = HybridAStar(search, convention=SEARCH_CONVENTION)
@@ -99,7 +121,8 @@ def build_planners(names: list[str], checkpoint: Path, footprint_checkpoint: Pat
         else:  # neuralparker_footprint
             from np_policy.planner import NeuralParkerPlanner
 
-            planners[name] = NeuralParkerPlanner.from_checkpoint(footprint_checkpoint, connector)
+            planners[name] = NeuralParkerPlanner.from_checkpoint(settings.footprint_checkpoint, settings.connector,
+                                                                 samples=settings.footprint_samples)
     return planners
 
 
@@ -140,11 +163,11 @@ _WORKER: dict[str, Any] = {}
 """Per-process state of the worker pool: clips and planners, built once per process."""
 
 
-def _init_worker(names, checkpoint, footprint_checkpoint, search_margin_m, connector) -> None:
+def _init_worker(names: list[str], settings: PlannerSettings) -> None:
     from np_sim.clips import load_clips
 
     _WORKER["clips"] = load_clips("eval")
-    _WORKER["planners"] = build_planners(names, checkpoint, footprint_checkpoint, search_margin_m, connector)
+    _WORKER["planners"] = build_planners(names, settings)
 
 
 def _work(args) -> list[dict]:
@@ -152,17 +175,14 @@ def _work(args) -> list[dict]:
     return clip_rows(_WORKER["clips"][index], _WORKER["planners"], controller, rrd_dir, render, clip_config)
 
 
-def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT, clips_limit: int | None = None,
+def run(planners: list[str] | None = None, settings: PlannerSettings | None = None, clips_limit: int | None = None,
         render_clips: int = 3, render: bool = True, out: Path | None = None, workers: int = 1,
         controller: str = "lqr", rrd: bool = True, progress: bool = True,
-        clip_names: list[str] | None = None, replan: str = "on_invalid",
-        footprint_checkpoint: Path = FOOTPRINT_CHECKPOINT, track_window: int = 1,
-        search_margin_m: float = 0.0, connector: str | None = None) -> dict[str, Any]:
+        clip_names: list[str] | None = None, replan: str = "on_invalid", track_window: int = 1) -> dict[str, Any]:
     """Run the clips × planners; returns records, table text, folder and notes (see the module docstring).
     ``planners=None`` runs all of them, leaving out the footprint-aware NeuralParker (with a note) when
-    ``footprint_checkpoint`` is missing; a planner named explicitly must have its checkpoint. ``track_window``
-    and ``search_margin_m`` are the perception filter and the searches' safety margin (both off by default,
-    as on the paper's vehicle); ``connector`` overrides NeuralParker's terminal connector."""
+    ``settings.footprint_checkpoint`` is missing; a planner named explicitly must have its checkpoint.
+    ``track_window`` is the perception filter (off by default, as on the paper's vehicle)."""
     from tracking.clip_run import ClipRunConfig
 
     from np_sim.clips import load_clips
@@ -174,12 +194,16 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
         raise ValueError(f"--workers: expected >= 1, got {workers}")
     names = list(PLANNERS if planners is None else planners)
     notes = []
-    footprint = Path(footprint_checkpoint)
+    settings = PlannerSettings() if settings is None else settings
+    footprint = Path(settings.footprint_checkpoint)
     if planners is None and not footprint.exists():
         names.remove("neuralparker_footprint")
         notes.append(f"NeuralParker (footprint): {footprint} is missing, row left out.")
     clip_config = ClipRunConfig(replan=replan, track_window=track_window)
-    build_planners(names, checkpoint, footprint, search_margin_m, connector)  # fail fast on a bad setting, before any work
+    if "neuralparker_footprint" in names and settings.footprint_samples:
+        notes.append(f"NeuralParker (footprint) plays the best of its mean rollout and {settings.footprint_samples} "
+                     f"sampled rollouts (np_policy.sampling; --footprint-samples 0 = the paper's planner).")
+    build_planners(names, settings)  # fail fast on a bad setting, before any work
     clips = load_clips("eval")
     if clip_names:
         known = {c.name: k for k, c in enumerate(clips)}
@@ -196,7 +220,7 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
     bar = tqdm(total=len(jobs) * len(names), desc="clips × planners in MuJoCo", unit="run", disable=not progress)
     results: list[list[dict]] = []
     if workers == 1:
-        _init_worker(names, checkpoint, footprint, search_margin_m, connector)
+        _init_worker(names, settings)
         for job in jobs:
             results.append(_work(job))
             bar.update(len(names))
@@ -204,7 +228,7 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
         # spawn, not fork: the parent has torch's thread pool up (build_planners above), and a forked child can
         # deadlock on its locks (it did: --workers 2 hung with idle workers)
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init_worker,
-                                 initargs=(names, checkpoint, footprint, search_margin_m, connector)) as pool:
+                                 initargs=(names, settings)) as pool:
             for rows in pool.map(_work, jobs):  # in clip order, so the records do not depend on the workers
                 results.append(rows)
                 bar.update(len(names))
@@ -217,11 +241,13 @@ def run(planners: list[str] | None = None, checkpoint: Path = DEFAULT_CHECKPOINT
     figure = search_time_figure(records, folder / "search_time.png")
     merged = merge_rrd(rrd_dir, folder / "closed_loop.rrd") if rrd_dir is not None else None
     (folder / "config.json").write_text(json.dumps({
-        "planners": names, "checkpoint": str(checkpoint),
+        "planners": names, "checkpoint": str(settings.checkpoint),
         "footprint_checkpoint": str(footprint) if "neuralparker_footprint" in names else None,
+        "footprint_samples": settings.footprint_samples if "neuralparker_footprint" in names else None,
         "search_convention": SEARCH_CONVENTION, "clips": [clips[k].name for k in indices], "controller": controller,
         "render_clips": render_clips if render else 0, "workers": workers, "wall_time_s": wall,
-        "search_margin_m": search_margin_m, "connector": connector, "clip_run": _clip_run_config(clip_config),
+        "search_margin_m": settings.search_margin_m, "connector": settings.connector,
+        "clip_run": _clip_run_config(clip_config),
         "git_commit": git_commit()},
         indent=2, default=str))
     return {"records": records, "table": table, "folder": folder, "figure": figure, "rrd": merged,
@@ -358,11 +384,17 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--connector", choices=("fixed", "ensemble"), default=None,
                         help="NeuralParker's terminal connector (default: the checkpoint's, the site's fixed nine "
                              "candidates; ensemble = the paper's 81-candidate ensemble, an evaluation-only swap)")
+    parser.add_argument("--footprint-samples", type=int, default=FOOTPRINT_SAMPLES, metavar="N",
+                        help=f"NeuralParker (footprint) plays the best of its mean rollout and N seeded sampled "
+                             f"rollouts, chosen by steerability, then length + clearance + reversal + terminal-heading "
+                             f"cost (default {FOOTPRINT_SAMPLES}; 0 = the paper's mean-action planner)")
     args = parser.parse_args(argv)
-    result = run(args.planners, args.checkpoint, args.clips_limit, args.render_clips, not args.no_render, args.out,
+    settings = PlannerSettings(checkpoint=args.checkpoint, footprint_checkpoint=args.footprint_checkpoint,
+                               search_margin_m=args.search_margin, connector=args.connector,
+                               footprint_samples=args.footprint_samples)
+    result = run(args.planners, settings, args.clips_limit, args.render_clips, not args.no_render, args.out,
                  args.workers, args.controller, clip_names=args.clip_names, replan=args.replan,
-                 footprint_checkpoint=args.footprint_checkpoint, track_window=args.track_window,
-                 search_margin_m=args.search_margin, connector=args.connector)
+                 track_window=args.track_window)
     folder = result["folder"]
     print(result["table"])
     print(f"\nwall time {result['wall_time_s']:.0f} s; results in {folder}/: records.csv, records.json, table.md, "

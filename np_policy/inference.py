@@ -121,6 +121,15 @@ def _mean_action(obs, mats, vecs, sections, shape, eps):
     return np.minimum(np.maximum(feature[0], np.float32(-1.0)), np.float32(1.0))
 
 
+@njit(cache=True, error_model="numpy")
+def _mean_actions(obs, mats, vecs, sections, shape, eps):
+    """``_mean_action`` of every row of ``obs`` (B, obs_size) -> (B, 2), in one call (one dispatch)."""
+    out = np.empty((obs.shape[0], 2), np.float32)
+    for r in range(obs.shape[0]):
+        out[r] = _mean_action(obs[r], mats, vecs, sections, shape, eps)
+    return out
+
+
 def _export(model: ActorCritic) -> tuple[List, List]:
     """The weights in ``_mean_action``'s consumption order (matrices transposed to in × out)."""
     mats, vecs = List(), List()
@@ -185,3 +194,11 @@ class CompiledActor:
             raise ValueError(f"CompiledActor: expected one observation of shape ({self.obs_size},), "
                              f"got {obs.shape}")
         return _mean_action(obs, self.mats, self.vecs, self.sections, self.shape, self.eps)
+
+    def batch(self, obs: np.ndarray) -> np.ndarray:
+        """(B, 2) float32 actions for B flat observations (B, ``obs_size``), one compiled call for all rows."""
+        obs = np.ascontiguousarray(obs, dtype=np.float32)
+        if obs.ndim != 2 or obs.shape[1] != self.obs_size:
+            raise ValueError(f"CompiledActor.batch: expected observations of shape (B, {self.obs_size}), "
+                             f"got {obs.shape}")
+        return _mean_actions(obs, self.mats, self.vecs, self.sections, self.shape, self.eps)

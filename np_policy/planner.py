@@ -4,6 +4,10 @@
 environment the policy was trained in (``ParkingEnv`` with the checkpoint's ``EnvConfig``), so arcs, collision
 checks, the heading gate and the Hermite selection follow exactly the env's rules. The mean action is evaluated by
 ``CompiledActor`` (the same weights in one numba function, about 20× faster than torch at batch 1).
+
+``samples=N`` (beyond the paper, ``np_policy.sampling``) adds N seeded stochastic rollouts of the same policy to
+the mean rollout and returns the successful one with the most clearance, then the shortest; ``samples=0`` (the
+default) is the paper's planner.
 """
 
 from __future__ import annotations
@@ -18,21 +22,26 @@ import numpy as np
 from np_policy.checkpoint import load_checkpoint
 from np_policy.inference import CompiledActor
 from np_policy.network import ActorCritic
+from np_policy.sampling import ChoiceWeights, SampledRollouts, choose, end_reason, hermite_of
 from np_policy.train import TrainConfig
 from np_sim.env import ParkingEnv
-from np_sim.frames import from_target_frame
-from np_sim.kernels.step import R_H_FORWARD
-from np_sim.plan import HermiteSegment, Plan
+from np_sim.plan import Plan
 from np_sim.scene import Scene
 
 
 class NeuralParkerPlanner:
     """A trained policy as a planner."""
 
-    def __init__(self, model: ActorCritic, config: TrainConfig):
+    def __init__(self, model: ActorCritic, config: TrainConfig, samples: int = 0,
+                 weights: ChoiceWeights | None = None, seed: int = 0):
+        if int(samples) < 0:
+            raise ValueError(f"NeuralParkerPlanner: samples must be >= 0, got {samples!r}")
         self.model = model.eval()
         self.actor = CompiledActor(self.model)
         self.config = config
+        self.weights = ChoiceWeights() if weights is None else weights
+        std = self.model.log_std.detach().exp().numpy()
+        self.sampled = SampledRollouts(self.actor, std, config.env, samples, seed) if samples else None
         self._envs: weakref.WeakKeyDictionary[Scene, ParkingEnv] = weakref.WeakKeyDictionary()
 
     def _env(self, scene: Scene) -> ParkingEnv:
@@ -44,11 +53,13 @@ class NeuralParkerPlanner:
         return env
 
     @classmethod
-    def from_checkpoint(cls, path: str | Path, connector: str | None = None) -> "NeuralParkerPlanner":
+    def from_checkpoint(cls, path: str | Path, connector: str | None = None, samples: int = 0,
+                        weights: ChoiceWeights | None = None, seed: int = 0) -> "NeuralParkerPlanner":
         """Rebuild the network and env config stored in a checkpoint (CheckpointError on a bad file).
 
         ``connector`` ('fixed' or 'ensemble') replaces the checkpoint's terminal connector (paper §III-E: the
-        81-candidate ensemble used at evaluation only); None keeps it."""
+        81-candidate ensemble used at evaluation only); None keeps it. ``samples``, ``weights``, ``seed``: best-of-N
+        sampled rollouts (module docstring; 0 = the paper's planner)."""
         payload = load_checkpoint(path)
         config = TrainConfig.from_dict(payload["config"])
         if connector is not None:
@@ -57,11 +68,18 @@ class NeuralParkerPlanner:
             config = dataclasses.replace(config, env=env)
         model = ActorCritic(config.env.observation, config.network)
         model.load_state_dict(payload["model"])
-        return cls(model, config)
+        return cls(model, config, samples=samples, weights=weights, seed=seed)
 
     def plan(self, scene: Scene, start) -> Plan:
-        """Roll out the mean action from ``start`` until success, collision or the arc budget (paper §III-A)."""
+        """Roll out the mean action from ``start`` until success, collision or the arc budget (paper §III-A); with
+        ``samples``, the best of that and the sampled rollouts (``np_policy.sampling.choose``)."""
         t0 = time.perf_counter()
+        plan = self._mean_rollout(scene, start)
+        if self.sampled is not None:
+            plan = choose([plan, *self.sampled(scene, start)], scene, self.config.env.vehicle, self.weights)
+        return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0)
+
+    def _mean_rollout(self, scene: Scene, start) -> Plan:
         env = self._env(scene)
         obs, _ = env.reset(options={"start": np.asarray(start, float)})
         kappa_max, l_max = self.config.env.vehicle.kappa_max, self.config.env.episode.max_length_m
@@ -72,13 +90,6 @@ class NeuralParkerPlanner:
             arcs.append((float(a[0]) * kappa_max, float(a[1]) * l_max))
             if terminated or truncated:
                 break
-        hermite = None
-        h = info["hermite_index"]
-        if h >= 0:
-            core = env.core
-            hermite = HermiteSegment(points=from_target_frame(core.h_pts[0, h].T, scene.target),
-                                     forward=bool(core.R[0, R_H_FORWARD] > 0), length=float(info["hermite_length"]),
-                                     delta_kappa=float(info["hermite_delta_kappa"]))
-        reason = "" if info["success"] else ("collision" if info["collision"] else "timeout")
-        return Plan(start=np.asarray(start, float), arcs=np.array(arcs).reshape(-1, 2), hermite=hermite,
-                    success=bool(info["success"]), reason=reason, plan_time_s=time.perf_counter() - t0)
+        reason = end_reason(env.core, 0)
+        return Plan(start=np.asarray(start, float), arcs=np.array(arcs).reshape(-1, 2),
+                    hermite=hermite_of(env.core, 0, scene), success=not reason, reason=reason)

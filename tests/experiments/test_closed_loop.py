@@ -78,3 +78,15 @@ def test_two_workers_give_the_records_of_one(tmp_path, site_checkpoint):
     two = main(args + ["--out", str(tmp_path / "two"), "--workers", "2"])["records"]  # hung with fork before
     keys = ("clip", "planner", "footprint_success", "reason", "plan_calls", "path_length_m", "final_position_error_m")
     assert [[r[k] for k in keys] for r in two] == [[r[k] for k in keys] for r in one]
+
+
+def test_footprint_samples_reach_the_planner_and_the_config(tmp_path):
+    out = tmp_path / "run"
+    main(["--clips", "--clip-names", KNOWN_FEASIBLE, "--planners", "neuralparker_footprint", "--no-render",
+          "--footprint-samples", "4", "--out", str(out)])
+    config = json.loads((out / "config.json").read_text())
+    assert config["footprint_samples"] == 4
+    assert "best of its mean rollout and 4 sampled rollouts" in (out / "table.md").read_text()
+    with pytest.raises(ValueError, match="--footprint-samples: expected >= 0"):
+        main(["--clips", "--clips-limit", "1", "--planners", "neuralparker_footprint", "--footprint-samples", "-1",
+              "--out", str(tmp_path / "bad")])

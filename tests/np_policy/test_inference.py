@@ -33,6 +33,7 @@ def test_compiled_mean_action_matches_torch(name):
     actor = CompiledActor(model)
     got = np.stack([actor(o) for o in obs.numpy()])
     assert got.dtype == np.float32
+    np.testing.assert_array_equal(actor.batch(obs.numpy()), got)
     np.testing.assert_allclose(got, expected, atol=2e-5, rtol=1e-4)
     assert (np.abs(expected) == 1.0).any() and (np.abs(expected) < 1.0).any()
 
@@ -42,3 +43,5 @@ def test_wrong_observation_shape_is_a_clear_error():
     with pytest.raises(ValueError, match=r"expected one observation of shape \(484,\), got \(2, 484\)"):
         actor(np.zeros((2, 484), np.float32))
 
+    with pytest.raises(ValueError, match=r"expected observations of shape \(B, 484\), got \(484,\)"):
+        actor.batch(np.zeros(484, np.float32))

@@ -1,0 +1,178 @@
+"""Best-of-N NeuralParker: sampled policy rollouts and a clearance-first choice among them (beyond the paper).
+
+The paper's planner plays the policy's mean action (§III-A). A trained policy is a distribution, though: the
+rollouts it would sample during training reach the target from many starts where the mean rollout collides or
+runs out of arcs, and among several successful rollouts some keep more distance from the obstacles than others.
+``SampledRollouts`` runs ``n`` stochastic rollouts from one start in one batched environment (``BatchCore``, one
+compiled step for all of them), each arc drawn as ``clip(μ(o) + σ ⊙ ε, −1, 1)`` with ``μ`` the compiled mean
+action, ``σ = exp(log_std)`` the policy's learned standard deviation and ``ε ~ N(0, I)`` from a generator seeded
+per call, so the same query always gives the same plans. ``choose`` ranks successful plans by the largest safety
+margin of a ladder under which the whole sampled path is footprint-free (the vehicle rectangle inflated by the
+margin on every side, `VehicleSpec.inflated`), then by path length L (paper eq:metrics).
+
+Arcs, checks, the heading gate, the connector and the arc budget are the env's own rules, as in the mean
+rollout; a sampled rollout is a plan the env would accept.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from np_sim.collision import path_valid
+from np_sim.config import EnvConfig
+from np_sim.env_core import BatchCore
+from np_sim.frames import from_target_frame
+from np_sim.kernels import step as K
+from np_sim.plan import HermiteSegment, Plan
+from np_sim.scene import Scene
+from np_sim.vehicle import VehicleSpec
+
+DEFAULT_MARGINS_M = (0.3, 0.2, 0.1, 0.0)
+"""Safety-margin ladder of ``choose`` (m), largest first; 0 is the plain footprint."""
+
+
+def hermite_of(core: BatchCore, row: int, scene: Scene) -> HermiteSegment | None:
+    """The terminal Hermite segment the last step of env ``row`` connected, in the world frame, or None."""
+    h = int(core.R[row, K.R_HERMITE])
+    if h < 0:
+        return None
+    return HermiteSegment(points=from_target_frame(core.h_pts[row, h].T, scene.target),
+                          forward=bool(core.R[row, K.R_H_FORWARD] > 0), length=float(core.R[row, K.R_H_LEN]),
+                          delta_kappa=float(core.R[row, K.R_H_DK]))
+
+
+def end_reason(core: BatchCore, row: int) -> str:
+    """'' on success, else 'collision' or 'timeout' (the arc budget ran out) for env ``row``'s ended episode."""
+    if core.R[row, K.R_SUCCESS] > 0:
+        return ""
+    return "collision" if core.R[row, K.R_COLLISION] > 0 else "timeout"
+
+
+class SampledRollouts:
+    """``n`` stochastic rollouts of a policy from one start, batched (module docstring)."""
+
+    def __init__(self, actor, std: np.ndarray, config: EnvConfig, n: int, seed: int = 0):
+        if int(n) < 1:
+            raise ValueError(f"SampledRollouts: n must be >= 1 rollout, got {n!r}")
+        std = np.asarray(std, np.float64)
+        if std.shape != (2,) or not np.all(np.isfinite(std)) or np.any(std < 0):
+            raise ValueError(f"SampledRollouts: std must be two finite numbers >= 0, got {std.tolist()}")
+        self.actor, self.std, self.config, self.n, self.seed = actor, std, config, int(n), int(seed)
+        self._cores: weakref.WeakKeyDictionary[Scene, BatchCore] = weakref.WeakKeyDictionary()
+
+    def _core(self, scene: Scene) -> BatchCore:
+        core = self._cores.get(scene)
+        if core is None:
+            core = BatchCore([scene], self.n, self.config, None)
+            self._cores[scene] = core
+        return core
+
+    def __call__(self, scene: Scene, start) -> list[Plan]:
+        """The ``n`` rollouts from ``start`` as plans, successful or not (ConfigError on a start in collision)."""
+        start = np.asarray(start, float)
+        core = self._core(scene)
+        rng = np.random.default_rng(self.seed)
+        rows = np.arange(self.n)
+        core.reset_envs(rows, rng, 0, start)
+        scale = np.array([self.config.vehicle.kappa_max, self.config.episode.max_length_m])
+        arcs: list[list[np.ndarray]] = [[] for _ in rows]
+        plans: list[Plan | None] = [None] * self.n
+        alive = np.ones(self.n, bool)
+        actions = np.zeros((self.n, 2))
+        while alive.any():
+            live = np.flatnonzero(alive)
+            noise = rng.standard_normal((len(live), 2)) * self.std
+            actions[live] = np.clip(self.actor.batch(core.obs[live]) + noise, -1.0, 1.0)
+            actions[~alive] = 0.0
+            core.step(actions)
+            for row in live:
+                arcs[row].append(actions[row] * scale)
+                if core.R[row, K.R_TERMINATED] > 0 or core.R[row, K.R_TRUNCATED] > 0:
+                    reason = end_reason(core, row)
+                    plans[row] = Plan(start=start, arcs=np.array(arcs[row]).reshape(-1, 2),
+                                      hermite=hermite_of(core, row, scene), success=not reason, reason=reason)
+                    alive[row] = False
+        return plans
+
+
+def clearance_level(scene: Scene, poses: np.ndarray, vehicle: VehicleSpec, margins: Sequence[float]) -> float:
+    """The largest margin of ``margins`` under which the footprint inflated by it (`VehicleSpec.inflated`) stays
+    inside the boundary and off every obstacle at every pose row (x, y, θ); −1 when none does."""
+    for margin in sorted(margins, reverse=True):
+        if path_valid(scene, poses, "footprint", vehicle.inflated(margin)):
+            return float(margin)
+    return -1.0
+
+
+@dataclass(frozen=True)
+class ChoiceWeights:
+    """How ``choose`` trades path length against clearance, reversals and the terminal heading (metres of L)."""
+
+    margins_m: tuple[float, ...] = DEFAULT_MARGINS_M
+    """Safety-margin ladder (m): a plan's clearance level is the largest of these its inflated footprint keeps."""
+    wanted_margin_m: float = 0.2
+    """Clearance below this costs ``clearance_weight`` per metre missing."""
+    clearance_weight: float = 50.0
+    """Cost per metre of clearance below ``wanted_margin_m`` (m/m); a path with no clearance level at all (its
+    plain footprint touches on the finer check) counts as one ladder step below 0."""
+    reversal_weight: float = 2.0
+    """Cost per reversal (m)."""
+    heading_slack_deg: float = 5.0
+    """Terminal headings farther than this from the target's cost ``heading_penalty``."""
+    heading_penalty: float = 5.0
+    """Cost of a terminal heading outside the slack (m): the tracker parks within the env's own 10°, so a plan
+    ending at that bound leaves no room for tracking error."""
+
+    def __post_init__(self) -> None:
+        if not self.margins_m or min(self.margins_m) < 0:
+            raise ValueError(f"ChoiceWeights.margins_m: expected margins >= 0 m, got {self.margins_m!r}")
+
+
+def plan_cost(plan: Plan, scene: Scene, vehicle: VehicleSpec, weights: ChoiceWeights,
+              ds_m: float = 0.05) -> tuple[bool, float]:
+    """(steering beyond κ_max, cost) of a successful plan; lower is better, steerable plans first.
+
+    Steering: |steer curvature| of ``Plan.sample(ds_m)`` within 1.05 κ_max, the tracker's own check (its
+    reference spacing and 5 % slack). Cost: L (paper eq:metrics) + reversal, clearance and terminal-heading
+    terms of ``weights``."""
+    rows = plan.sample(ds_m)
+    too_sharp = not bool(np.all(np.abs(rows[:, 3]) <= 1.05 * vehicle.kappa_max))
+    level = clearance_level(scene, rows[:, :3], vehicle, weights.margins_m)
+    if level < 0:
+        steps = sorted(weights.margins_m)
+        level = -(steps[1] - steps[0]) if len(steps) > 1 else -weights.wanted_margin_m
+    heading_error = abs(math.remainder(rows[-1, 2] - float(scene.target[2]), 2 * math.pi))
+    length, reversals, _ = plan.metrics()
+    cost = (length + weights.reversal_weight * reversals
+            + weights.clearance_weight * max(0.0, weights.wanted_margin_m - level)
+            + weights.heading_penalty * (heading_error > math.radians(weights.heading_slack_deg)))
+    return too_sharp, cost
+
+
+def choose(plans: Sequence[Plan], scene: Scene, vehicle: VehicleSpec, weights: ChoiceWeights | None = None) -> Plan:
+    """The successful plan of ``plans`` with the lowest ``plan_cost``; ties keep the earlier plan. With no
+    successful plan, the first plan (the mean rollout when it leads the list).
+
+    Plans are costed in order of L + reversal term, a lower bound of their cost, and the search stops once that
+    bound exceeds the best steerable cost found (the clearance checks are the expensive part)."""
+    if not plans:
+        raise ValueError("choose: expected at least one plan, got none")
+    weights = ChoiceWeights() if weights is None else weights
+    bounds = []
+    for i, p in enumerate(plans):
+        if p.success:
+            length, reversals, _ = p.metrics()
+            bounds.append((length + weights.reversal_weight * reversals, i))
+    best: tuple[tuple[bool, float], int] | None = None
+    for bound, i in sorted(bounds):
+        if best is not None and not best[0][0] and bound > best[0][1]:
+            break
+        candidate = (plan_cost(plans[i], scene, vehicle, weights), i)
+        if best is None or candidate < best:
+            best = candidate
+    return plans[0] if best is None else plans[best[1]]

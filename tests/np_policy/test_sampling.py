@@ -1,0 +1,117 @@
+"""Best-of-N NeuralParker (np_policy.sampling): seeded rollouts that replay in the env's kinematics, and a choice
+that equals the brute-force minimum of its cost and prefers steerable, clear, short plans."""
+
+import math
+
+import numpy as np
+import pytest
+
+from np_policy.planner import NeuralParkerPlanner
+from np_policy.sampling import ChoiceWeights, choose, clearance_level, plan_cost
+from np_sim.clips import load_clips
+from np_sim.kinematics import arc_step
+from np_sim.plan import Plan
+from np_sim.scene import PolygonObstacle, Scene
+from np_sim.vehicle import VehicleSpec
+
+CHECKPOINT = "checkpoints/site_np_footprint.pt"
+
+
+@pytest.fixture(scope="module")
+def problem():
+    """eval-1000008 at frame 0: the mean rollout of the shipped footprint checkpoint fails there."""
+    clip = next(c for c in load_clips("eval") if c.name == "eval-1000008")
+    start = np.asarray(clip.start, float)
+    return clip.frame_scene(0, pose=start), start
+
+
+@pytest.fixture(scope="module")
+def sampled():
+    return NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=16, seed=3)
+
+
+def test_sampling_finds_a_plan_where_the_mean_rollout_fails_and_is_deterministic(problem, sampled):
+    scene, start = problem
+    mean = NeuralParkerPlanner.from_checkpoint(CHECKPOINT).plan(scene, start)
+    assert not mean.success
+    first, second = sampled.plan(scene, start), sampled.plan(scene, start)
+    assert first.success
+    np.testing.assert_array_equal(first.arcs, second.arcs)
+    np.testing.assert_array_equal(first.hermite.points, second.hermite.points)
+
+
+def test_sampled_rollouts_replay_in_the_arc_kinematics(problem, sampled):
+    """Each recorded arc is the one the env executed: replaying them from the start reaches the pose the Hermite
+    segment starts from (or, without one, a pose within the env's terminal tolerance of the target)."""
+    scene, start = problem
+    plans = sampled.sampled(scene, start)
+    assert len(plans) == 16 and any(p.success for p in plans) and not all(p.success for p in plans)
+    for plan in plans:
+        assert plan.success == (plan.reason == "")
+        assert plan.reason in ("", "collision", "timeout")
+        pose = np.asarray(start, float)
+        for kappa, length in plan.arcs:
+            pose = arc_step(pose, kappa, length)
+        if plan.success and plan.hermite is not None:
+            np.testing.assert_allclose(plan.hermite.points[0], pose[:2], atol=1e-6)
+        elif plan.success:
+            assert math.hypot(*(pose[:2] - scene.target[:2])) <= 0.1 + 1e-9
+
+
+def test_choose_equals_the_brute_force_minimum(problem, sampled):
+    scene, start = problem
+    vehicle = sampled.config.env.vehicle
+    plans = sampled.sampled(scene, start)
+    weights = ChoiceWeights()
+    costs = [(plan_cost(p, scene, vehicle, weights), i) for i, p in enumerate(plans) if p.success]
+    assert choose(plans, scene, vehicle, weights) is plans[min(costs)[1]]
+    failed = [p for p in plans if not p.success]
+    assert choose(failed, scene, vehicle, weights) is failed[0]
+    with pytest.raises(ValueError, match="at least one plan"):
+        choose([], scene, vehicle)
+
+
+def _corridor() -> Scene:
+    """A 40 × 12 m yard with one box whose lower face lies at y = 1.5 (target far to the right)."""
+    boundary = np.array([[-5.0, -6.0], [35.0, -6.0], [35.0, 6.0], [-5.0, 6.0]])
+    box = np.array([[8.0, 1.5], [12.0, 1.5], [12.0, 4.0], [8.0, 4.0]])
+    return Scene(boundary=boundary, obstacles=(PolygonObstacle(box),), target=np.array([30.0, 0.0, 0.0]),
+                 start_region=None, name="corridor")
+
+
+def _straight(y: float, length: float) -> Plan:
+    return Plan(start=np.array([0.0, y, 0.0]), arcs=np.array([[0.0, length]]), success=True)
+
+
+def test_clearance_levels_and_the_cost_terms_by_hand():
+    """Half width 0.971 m: a straight run at y = 0.3 keeps 1.5 − 0.3 − 0.971 = 0.229 m from the box (level 0.2);
+    at y = 0.45 it keeps 0.079 m (level 0.0, cost +50 × 0.2 = 10 m)."""
+    scene, vehicle = _corridor(), VehicleSpec()
+    clear, close = _straight(0.3, 20.0), _straight(0.45, 20.0)
+    assert clearance_level(scene, clear.sample(0.05)[:, :3], vehicle, (0.3, 0.2, 0.1, 0.0)) == 0.2
+    assert clearance_level(scene, close.sample(0.05)[:, :3], vehicle, (0.3, 0.2, 0.1, 0.0)) == 0.0
+    weights = ChoiceWeights(heading_penalty=0.0)
+    assert plan_cost(clear, scene, vehicle, weights) == (False, pytest.approx(20.0))
+    assert plan_cost(close, scene, vehicle, weights) == (False, pytest.approx(30.0))
+    # a shorter path that passes close loses to a longer clear one, and wins once the gap is more than 10 m
+    assert choose([_straight(0.45, 12.0), clear], scene, vehicle, weights) is clear
+    shortcut = _straight(0.45, 9.0)
+    assert choose([shortcut, clear], scene, vehicle, weights) is shortcut
+    # a reversal costs reversal_weight
+    back = Plan(start=np.array([0.0, 0.3, 0.0]), arcs=np.array([[0.0, 12.0], [0.0, -2.0]]), success=True)
+    assert plan_cost(back, scene, vehicle, weights)[1] == pytest.approx(14.0 + 2.0)
+
+
+def test_a_plan_steering_beyond_kappa_max_loses_to_any_steerable_plan():
+    scene, vehicle = _corridor(), VehicleSpec()
+    sharp = Plan(start=np.array([0.0, 0.3, 0.0]), arcs=np.array([[1.2 * vehicle.kappa_max, 1.0]]), success=True)
+    assert plan_cost(sharp, scene, vehicle, ChoiceWeights())[0]
+    long_clear = _straight(0.3, 25.0)
+    assert choose([sharp, long_clear], scene, vehicle) is long_clear
+
+
+def test_bad_settings_are_named():
+    with pytest.raises(ValueError, match="samples must be >= 0"):
+        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=-1)
+    with pytest.raises(ValueError, match="margins_m"):
+        ChoiceWeights(margins_m=(0.1, -0.2))
