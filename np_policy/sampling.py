@@ -6,9 +6,12 @@ runs out of arcs, and among several successful rollouts some keep more distance 
 ``SampledRollouts`` runs ``n`` stochastic rollouts from one start in one batched environment (``BatchCore``, one
 compiled step for all of them), each arc drawn as ``clip(μ(o) + σ ⊙ ε, −1, 1)`` with ``μ`` the compiled mean
 action, ``σ = exp(log_std)`` the policy's learned standard deviation and ``ε ~ N(0, I)`` from a generator seeded
-per call, so the same query always gives the same plans. ``choose`` ranks successful plans by the largest safety
-margin of a ladder under which the whole sampled path is footprint-free (the vehicle rectangle inflated by the
-margin on every side, `VehicleSpec.inflated`), then by path length L (paper eq:metrics).
+per call, so the same query always gives the same plans. ``choose`` keeps the plans the tracker can steer and
+among them takes the lowest cost: an estimate of the drive time (as a length), a cost per reversal, a cost for
+clearance below a wanted safety margin (the largest margin of a ladder under which the whole sampled path keeps
+the vehicle rectangle inflated by it off every obstacle, `VehicleSpec.inflated`) and one for a terminal heading
+near the edge of the parking tolerance. The weights were set on difficult training clips, never on the held-out
+ones.
 
 Arcs, checks, the heading gate, the connector and the arc budget are the env's own rules, as in the mean
 rollout; a sampled rollout is a plan the env would accept.
@@ -122,6 +125,12 @@ class ChoiceWeights:
     plain footprint touches on the finer check) counts as one ladder step below 0."""
     reversal_weight: float = 2.0
     """Cost per reversal (m)."""
+    forward_speed_mps: float = 2.0
+    """Cruise speed forward (m/s) of the drive-time estimate (`drive_length`; the tracker's default profile)."""
+    reverse_speed_mps: float = 1.5
+    """Cruise speed in reverse (m/s) of the drive-time estimate."""
+    lateral_accel_mps2: float = 1.0
+    """Lateral acceleration bound v²·|c| (m/s²) of the drive-time estimate."""
     heading_slack_deg: float = 5.0
     """Terminal headings farther than this from the target's cost ``heading_penalty``."""
     heading_penalty: float = 5.0
@@ -131,6 +140,24 @@ class ChoiceWeights:
     def __post_init__(self) -> None:
         if not self.margins_m or min(self.margins_m) < 0:
             raise ValueError(f"ChoiceWeights.margins_m: expected margins >= 0 m, got {self.margins_m!r}")
+        for name in ("forward_speed_mps", "reverse_speed_mps", "lateral_accel_mps2"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"ChoiceWeights.{name}: expected > 0, got {getattr(self, name)!r}")
+
+    @property
+    def top_speed_ratio(self) -> float:
+        """forward speed / the faster gear's speed: ``drive_length`` ≥ this × L (``choose``'s lower bound)."""
+        return self.forward_speed_mps / max(self.forward_speed_mps, self.reverse_speed_mps)
+
+
+def drive_length(rows: np.ndarray, weights: ChoiceWeights) -> float:
+    """Drive time of sampled plan rows (``Plan.sample``: …, steer curvature c, gear, s) at the speed
+    min(gear's cruise speed, √(a_lat / |c|)) at every sample, times the forward cruise speed: a length (m) that
+    counts curves and reverse stretches as the slower driving they are (the clip runs have a time limit)."""
+    ds = np.diff(rows[:, 5])
+    cruise = np.where(rows[1:, 4] > 0, weights.forward_speed_mps, weights.reverse_speed_mps)
+    curve = np.sqrt(weights.lateral_accel_mps2 / np.maximum(np.abs(rows[1:, 3]), 1e-12))
+    return float(np.sum(ds / np.minimum(cruise, curve)) * weights.forward_speed_mps)
 
 
 def plan_cost(plan: Plan, scene: Scene, vehicle: VehicleSpec, weights: ChoiceWeights,
@@ -138,8 +165,8 @@ def plan_cost(plan: Plan, scene: Scene, vehicle: VehicleSpec, weights: ChoiceWei
     """(steering beyond κ_max, cost) of a successful plan; lower is better, steerable plans first.
 
     Steering: |steer curvature| of ``Plan.sample(ds_m)`` within 1.05 κ_max, the tracker's own check (its
-    reference spacing and 5 % slack). Cost: L (paper eq:metrics) + reversal, clearance and terminal-heading
-    terms of ``weights``."""
+    reference spacing and 5 % slack). Cost: ``drive_length`` + reversal, clearance and terminal-heading terms of
+    ``weights``."""
     rows = plan.sample(ds_m)
     too_sharp = not bool(np.all(np.abs(rows[:, 3]) <= 1.05 * vehicle.kappa_max))
     level = clearance_level(scene, rows[:, :3], vehicle, weights.margins_m)
@@ -147,8 +174,8 @@ def plan_cost(plan: Plan, scene: Scene, vehicle: VehicleSpec, weights: ChoiceWei
         steps = sorted(weights.margins_m)
         level = -(steps[1] - steps[0]) if len(steps) > 1 else -weights.wanted_margin_m
     heading_error = abs(math.remainder(rows[-1, 2] - float(scene.target[2]), 2 * math.pi))
-    length, reversals, _ = plan.metrics()
-    cost = (length + weights.reversal_weight * reversals
+    reversals = plan.metrics()[1]
+    cost = (drive_length(rows, weights) + weights.reversal_weight * reversals
             + weights.clearance_weight * max(0.0, weights.wanted_margin_m - level)
             + weights.heading_penalty * (heading_error > math.radians(weights.heading_slack_deg)))
     return too_sharp, cost
@@ -158,8 +185,9 @@ def choose(plans: Sequence[Plan], scene: Scene, vehicle: VehicleSpec, weights: C
     """The successful plan of ``plans`` with the lowest ``plan_cost``; ties keep the earlier plan. With no
     successful plan, the first plan (the mean rollout when it leads the list).
 
-    Plans are costed in order of L + reversal term, a lower bound of their cost, and the search stops once that
-    bound exceeds the best steerable cost found (the clearance checks are the expensive part)."""
+    Plans are costed in order of ``top_speed_ratio`` × L + reversal term, a lower bound of their cost, and the
+    search stops once that bound exceeds the best steerable cost found (the clearance checks are the expensive
+    part)."""
     if not plans:
         raise ValueError("choose: expected at least one plan, got none")
     weights = ChoiceWeights() if weights is None else weights
@@ -167,7 +195,7 @@ def choose(plans: Sequence[Plan], scene: Scene, vehicle: VehicleSpec, weights: C
     for i, p in enumerate(plans):
         if p.success:
             length, reversals, _ = p.metrics()
-            bounds.append((length + weights.reversal_weight * reversals, i))
+            bounds.append((weights.top_speed_ratio * length + weights.reversal_weight * reversals, i))
     best: tuple[tuple[bool, float], int] | None = None
     for bound, i in sorted(bounds):
         if best is not None and not best[0][0] and bound > best[0][1]:

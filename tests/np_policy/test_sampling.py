@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from np_policy.planner import NeuralParkerPlanner
-from np_policy.sampling import ChoiceWeights, choose, clearance_level, plan_cost
+from np_policy.sampling import ChoiceWeights, choose, clearance_level, drive_length, plan_cost
 from np_sim.clips import load_clips
 from np_sim.kinematics import arc_step
 from np_sim.plan import Plan
@@ -97,9 +97,12 @@ def test_clearance_levels_and_the_cost_terms_by_hand():
     assert choose([_straight(0.45, 12.0), clear], scene, vehicle, weights) is clear
     shortcut = _straight(0.45, 9.0)
     assert choose([shortcut, clear], scene, vehicle, weights) is shortcut
-    # a reversal costs reversal_weight
+    # drive time as a length at 2 m/s: 12 m forward, 2 m reverse at 1.5 m/s (2 × 2 / 1.5), one reversal (2 m)
     back = Plan(start=np.array([0.0, 0.3, 0.0]), arcs=np.array([[0.0, 12.0], [0.0, -2.0]]), success=True)
-    assert plan_cost(back, scene, vehicle, weights)[1] == pytest.approx(14.0 + 2.0)
+    assert plan_cost(back, scene, vehicle, weights)[1] == pytest.approx(12.0 + 2.0 * 2.0 / 1.5 + 2.0)
+    # a curve of κ = 0.5: v = min(2, √(1 / 0.5)) = √2 m/s, so 6 m of it weigh 6 × 2 / √2
+    curve = Plan(start=np.array([0.0, 0.0, 0.0]), arcs=np.array([[0.5, 6.0]]), success=True)
+    assert drive_length(curve.sample(0.05), weights) == pytest.approx(6.0 * 2.0 / math.sqrt(2.0))
 
 
 def test_a_plan_steering_beyond_kappa_max_loses_to_any_steerable_plan():
@@ -115,3 +118,5 @@ def test_bad_settings_are_named():
         NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=-1)
     with pytest.raises(ValueError, match="margins_m"):
         ChoiceWeights(margins_m=(0.1, -0.2))
+    with pytest.raises(ValueError, match="reverse_speed_mps: expected > 0"):
+        ChoiceWeights(reverse_speed_mps=0.0)
