@@ -1,5 +1,7 @@
 """NeuralParkerPlanner: rebuilt from a checkpoint, plays the env's rules, returns a consistent Plan."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -68,6 +70,13 @@ def test_evaluate_cli_writes_records_and_table(planner, tmp_path):
     assert "| NeuralParker (fixed) |" in result["table"]
     # two identical seeds: the sample SD over seeds is zero
     assert "± 0.000" in result["table"].splitlines()[-1]
+    best = main(["--benchmark", "factorial", "--checkpoints", str(ckpt), "--connector", "fixed", "--samples", "3",
+                 "--out", str(tmp_path / "best"), "--limit", "6"])
+    assert "| NeuralParker, best of 1 + 3 (" in best["table"]
+    assert json.loads((tmp_path / "best" / "config.json").read_text())["samples"] == 3
+    # the mean rollout is among the candidates, so best-of-N solves every start the mean action solves
+    solved = {(r["scene"], int(r["start_id"])) for r in rows[:6] if r["success"] == "1"}
+    assert solved <= {(r["scene"], r["start_id"]) for r in best["records"] if r["success"]}
 
 
 def test_the_connector_can_be_swapped_at_load_and_a_bad_mode_is_named(planner, tmp_path):
