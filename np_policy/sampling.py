@@ -35,8 +35,9 @@ from np_sim.plan import HermiteSegment, Plan
 from np_sim.scene import Scene
 from np_sim.vehicle import VehicleSpec
 
-DEFAULT_MARGINS_M = (0.3, 0.2, 0.1, 0.0)
-"""Safety-margin ladder of ``choose`` (m), largest first; 0 is the plain footprint."""
+DEFAULT_MARGINS_M = (0.2, 0.1, 0.0)
+"""Safety-margin ladder of ``choose`` (m), largest first; 0 is the plain footprint. It ends at
+``ChoiceWeights.wanted_margin_m``: more clearance than that costs nothing, so checking it would be wasted."""
 
 
 def hermite_of(core: BatchCore, row: int, scene: Scene) -> HermiteSegment | None:
@@ -181,21 +182,29 @@ def plan_cost(plan: Plan, scene: Scene, vehicle: VehicleSpec, weights: ChoiceWei
     return too_sharp, cost
 
 
+def cost_lower_bound(plan: Plan, weights: ChoiceWeights) -> float:
+    """A lower bound of ``plan_cost`` without sampling the plan: the arcs' drive length exactly (constant curvature
+    per arc), the Hermite segment's as ``top_speed_ratio`` × L_H, the reversal term; a hair below, so rounding
+    never lifts it above the cost."""
+    arcs = np.asarray(plan.arcs, float).reshape(-1, 2)
+    cruise = np.where(arcs[:, 1] > 0, weights.forward_speed_mps, weights.reverse_speed_mps)
+    curve = np.sqrt(weights.lateral_accel_mps2 / np.maximum(np.abs(arcs[:, 0]), 1e-12))
+    drive = float(np.sum(np.abs(arcs[:, 1]) / np.minimum(cruise, curve))) * weights.forward_speed_mps
+    if plan.hermite is not None:
+        drive += weights.top_speed_ratio * plan.hermite.length
+    return drive + weights.reversal_weight * plan.metrics()[1] - 1e-9
+
+
 def choose(plans: Sequence[Plan], scene: Scene, vehicle: VehicleSpec, weights: ChoiceWeights | None = None) -> Plan:
     """The successful plan of ``plans`` with the lowest ``plan_cost``; ties keep the earlier plan. With no
     successful plan, the first plan (the mean rollout when it leads the list).
 
-    Plans are costed in order of ``top_speed_ratio`` × L + reversal term, a lower bound of their cost, and the
-    search stops once that bound exceeds the best steerable cost found (the clearance checks are the expensive
-    part)."""
+    Plans are costed in order of ``cost_lower_bound`` and the search stops once that bound exceeds the best
+    steerable cost found (the clearance checks are the expensive part)."""
     if not plans:
         raise ValueError("choose: expected at least one plan, got none")
     weights = ChoiceWeights() if weights is None else weights
-    bounds = []
-    for i, p in enumerate(plans):
-        if p.success:
-            length, reversals, _ = p.metrics()
-            bounds.append((weights.top_speed_ratio * length + weights.reversal_weight * reversals, i))
+    bounds = [(cost_lower_bound(p, weights), i) for i, p in enumerate(plans) if p.success]
     best: tuple[tuple[bool, float], int] | None = None
     for bound, i in sorted(bounds):
         if best is not None and not best[0][0] and bound > best[0][1]:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from np_policy.planner import NeuralParkerPlanner
-from np_policy.sampling import ChoiceWeights, choose, clearance_level, drive_length, plan_cost
+from np_policy.sampling import ChoiceWeights, choose, clearance_level, cost_lower_bound, drive_length, plan_cost
 from np_sim.clips import load_clips
 from np_sim.kinematics import arc_step
 from np_sim.plan import Plan
@@ -65,6 +65,8 @@ def test_choose_equals_the_brute_force_minimum(problem, sampled):
     weights = ChoiceWeights()
     costs = [(plan_cost(p, scene, vehicle, weights), i) for i, p in enumerate(plans) if p.success]
     assert choose(plans, scene, vehicle, weights) is plans[min(costs)[1]]
+    for (_, cost), i in costs:  # the pruning bound never exceeds the cost
+        assert cost_lower_bound(plans[i], weights) <= cost
     failed = [p for p in plans if not p.success]
     assert choose(failed, scene, vehicle, weights) is failed[0]
     with pytest.raises(ValueError, match="at least one plan"):
@@ -100,6 +102,7 @@ def test_clearance_levels_and_the_cost_terms_by_hand():
     # drive time as a length at 2 m/s: 12 m forward, 2 m reverse at 1.5 m/s (2 × 2 / 1.5), one reversal (2 m)
     back = Plan(start=np.array([0.0, 0.3, 0.0]), arcs=np.array([[0.0, 12.0], [0.0, -2.0]]), success=True)
     assert plan_cost(back, scene, vehicle, weights)[1] == pytest.approx(12.0 + 2.0 * 2.0 / 1.5 + 2.0)
+    assert cost_lower_bound(back, weights) == pytest.approx(12.0 + 2.0 * 2.0 / 1.5 + 2.0)
     # a curve of κ = 0.5: v = min(2, √(1 / 0.5)) = √2 m/s, so 6 m of it weigh 6 × 2 / √2
     curve = Plan(start=np.array([0.0, 0.0, 0.0]), arcs=np.array([[0.5, 6.0]]), success=True)
     assert drive_length(curve.sample(0.05), weights) == pytest.approx(6.0 * 2.0 / math.sqrt(2.0))
