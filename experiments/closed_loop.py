@@ -387,7 +387,7 @@ def main(argv=None) -> dict[str, Any]:
                              "candidates; ensemble = the paper's 81-candidate ensemble, an evaluation-only swap)")
     parser.add_argument("--footprint-samples", type=int, default=FOOTPRINT_SAMPLES, metavar="N",
                         help=f"NeuralParker (footprint) plays the best of its mean rollout and N seeded sampled "
-                             f"rollouts, chosen by steerability, then length + clearance + reversal + terminal-heading "
+                             f"rollouts, chosen by steerability, then drive time + clearance + reversal + terminal-heading "
                              f"cost (default {FOOTPRINT_SAMPLES}; 0 = the paper's mean-action planner)")
     args = parser.parse_args(argv)
     settings = PlannerSettings(checkpoint=args.checkpoint, footprint_checkpoint=args.footprint_checkpoint,

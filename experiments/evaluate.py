@@ -79,7 +79,7 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
     parser.add_argument("--checkpoints", type=Path, nargs="+", required=True, help="one checkpoint per seed")
     parser.add_argument("--connector", choices=["fixed", "ensemble"], help="override the terminal connector")
-    parser.add_argument("--samples", type=int, default=0,
+    parser.add_argument("--samples", type=int, default=0, metavar="N",
                         help="plan with the best of the mean rollout and N seeded sampled rollouts (default 0: the "
                              "paper's deterministic planner)")
     parser.add_argument("--out", type=Path, help="run folder (default: results/evaluate/<timestamp>)")
