@@ -6,10 +6,10 @@
 Each checkpoint is one training seed. Every frozen start (1,080 Factorial, 720 Topology-Stress) is planned with
 the deterministic policy and the checkpoint's environment rules (``--connector`` swaps the terminal connector at
 evaluation time only: the paper's "ensemble, evaluation only" row; ``--samples N`` plans with the best of the mean
-rollout and N seeded sampled rollouts, `np_policy.sampling`, beyond the paper). Success is on the full set; path length L,
-reversals and Δκ (eq:metrics) on the common-success cohort — here the episodes every evaluated seed solved —
-reported as the mean ± sample SD over seeds; plan time as median and 90th percentile. Writes ``records.csv``
-and ``records.json`` (one row per episode), ``table.md`` and ``config.json`` into the run folder.
+rollout and N seeded sampled rollouts, `np_policy.sampling`, beyond the paper). Success is on the full set; path
+length L, reversals and Δκ (eq:metrics) on the common-success cohort — here the episodes every evaluated seed
+solved — reported as the mean ± sample SD over seeds; plan time as median and 90th percentile. Writes
+``records.csv`` and ``records.json`` (one row per episode), ``table.md`` and ``config.json`` into the run folder.
 """
 
 from __future__ import annotations
