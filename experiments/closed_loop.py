@@ -101,8 +101,8 @@ def build_planners(names: list[str], settings: PlannerSettings) -> dict[str, Any
         if not Path(settings.checkpoint).exists():
             raise FileNotFoundError(
                 f"experiments.closed_loop: the site NeuralParker checkpoint {settings.checkpoint} does not exist; "
-                f"pass --checkpoint PATH (a site-configuration checkpoint, e.g. checkpoints/runs/site_np_seed0/best.pt) "
-                f"or leave neuralparker and np_guided_astar out of --planners")
+                f"pass --checkpoint PATH (a site-configuration checkpoint, e.g. "
+                f"checkpoints/runs/site_np_seed0/best.pt) or leave neuralparker and np_guided_astar out of --planners")
         from np_policy.planner import NeuralParkerPlanner
 
         learned = NeuralParkerPlanner.from_checkpoint(settings.checkpoint, settings.connector)
@@ -387,8 +387,8 @@ def main(argv=None) -> dict[str, Any]:
                              "candidates; ensemble = the paper's 81-candidate ensemble, an evaluation-only swap)")
     parser.add_argument("--footprint-samples", type=int, default=FOOTPRINT_SAMPLES, metavar="N",
                         help=f"NeuralParker (footprint) plays the best of its mean rollout and N seeded sampled "
-                             f"rollouts, chosen by steerability, then drive time + clearance + reversal + terminal-heading "
-                             f"cost (default {FOOTPRINT_SAMPLES}; 0 = the paper's mean-action planner)")
+                             f"rollouts, chosen by steerability, then drive time + clearance + reversal + "
+                             f"terminal-heading cost (default {FOOTPRINT_SAMPLES}; 0 = the paper's mean-action planner)")
     args = parser.parse_args(argv)
     settings = PlannerSettings(checkpoint=args.checkpoint, footprint_checkpoint=args.footprint_checkpoint,
                                search_margin_m=args.search_margin, connector=args.connector,

@@ -55,7 +55,8 @@ def measure(checkpoint: str | Path, episodes: int | None = None, seed: int = 0, 
         planner.actor(obs)
     actor_us = 1e6 * (time.perf_counter() - t0) / calls
     ms = 1e3 * np.asarray(times)
-    return {"checkpoint": str(checkpoint), "samples": samples, "episodes": len(pairs), "success": float(np.mean(success)),
+    return {"checkpoint": str(checkpoint), "samples": samples, "episodes": len(pairs),
+            "success": float(np.mean(success)),
             "plan_time_median_ms": float(np.median(ms)), "plan_time_p90_ms": float(np.percentile(ms, 90)),
             "plan_time_mean_ms": float(ms.mean()), "arcs_median": float(np.median(arcs)),
             "arcs_mean": float(np.mean(arcs)), "actor_us_per_call": actor_us,
