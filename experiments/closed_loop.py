@@ -58,8 +58,8 @@ SEARCH_CONVENTION = "footprint"
 """Collision convention of Hybrid A* and of NP-Guided A*'s search (the paper validates with the footprint)."""
 FOOTPRINT_SAMPLES = 32
 """Default sampled rollouts of NeuralParker (footprint), set on the first 94 difficult training clips, not on the
-held-out ones: executed footprint success 0.62 with none, 0.73 with 16 and 0.81 with 32 (length cost), 0.83 with 32
-and the drive-time cost, 0.78 with 64 (SE of 94 clips ≈ 0.04)."""
+held-out ones: executed footprint success 0.59 with none, 0.73 with 16 and 0.81 with 32 (length cost), 0.83 with 32
+and the drive-time cost, 0.78 with 64 (SE of 94 clips ≈ 0.04; README, "Best-of-N NeuralParker")."""
 PAPER = {"neuralparker": "0.60 (0.93) | 7.0 | 1.20 | 0.37", "np_guided_astar": "0.72 | 7.7 | 1.17 | 4.24",
          "hybrid_astar": "0.67 | 7.2 | 1.13 | 5.26"}
 """Table tab:realworld (real vehicle, C++ plan times): succ. | L | Rev. | plan time (ms)."""
@@ -388,7 +388,8 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--footprint-samples", type=int, default=FOOTPRINT_SAMPLES, metavar="N",
                         help=f"NeuralParker (footprint) plays the best of its mean rollout and N seeded sampled "
                              f"rollouts, chosen by steerability, then drive time + clearance + reversal + "
-                             f"terminal-heading cost (default {FOOTPRINT_SAMPLES}; 0 = the paper's mean-action planner)")
+                             f"terminal-heading cost (default {FOOTPRINT_SAMPLES}; 0 = the paper's mean-action "
+                             f"planner)")
     args = parser.parse_args(argv)
     settings = PlannerSettings(checkpoint=args.checkpoint, footprint_checkpoint=args.footprint_checkpoint,
                                search_margin_m=args.search_margin, connector=args.connector,

@@ -6,8 +6,8 @@ checks, the heading gate and the Hermite selection follow exactly the env's rule
 ``CompiledActor`` (the same weights in one numba function, about 20× faster than torch at batch 1).
 
 ``samples=N`` (beyond the paper, ``np_policy.sampling``) adds N seeded stochastic rollouts of the same policy to
-the mean rollout and returns the successful one with the most clearance, then the shortest; ``samples=0`` (the
-default) is the paper's planner.
+the mean rollout and returns the successful one the tracker can steer with the lowest drive-time, reversal,
+clearance and terminal-heading cost; ``samples=0`` (the default) is the paper's planner.
 """
 
 from __future__ import annotations

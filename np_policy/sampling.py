@@ -1,4 +1,4 @@
-"""Best-of-N NeuralParker: sampled policy rollouts and a clearance-first choice among them (beyond the paper).
+"""Best-of-N NeuralParker: sampled policy rollouts and a cost-based choice among them (beyond the paper).
 
 The paper's planner plays the policy's mean action (§III-A). A trained policy is a distribution, though: the
 rollouts it would sample during training reach the target from many starts where the mean rollout collides or
@@ -115,7 +115,8 @@ def clearance_level(scene: Scene, poses: np.ndarray, vehicle: VehicleSpec, margi
 
 @dataclass(frozen=True)
 class ChoiceWeights:
-    """How ``choose`` trades path length against clearance, reversals and the terminal heading (metres of L)."""
+    """How ``choose`` tells a steerable plan and trades drive time against clearance, reversals and the terminal
+    heading (costs in metres of driving at the forward cruise speed)."""
 
     margins_m: tuple[float, ...] = DEFAULT_MARGINS_M
     """Safety-margin ladder (m): a plan's clearance level is the largest of these its inflated footprint keeps."""
@@ -137,6 +138,12 @@ class ChoiceWeights:
     heading_penalty: float = 5.0
     """Cost of a terminal heading outside the slack (m): the tracker parks within the env's own 10°, so a plan
     ending at that bound leaves no room for tracking error."""
+    curvature_tolerance: float = 0.05
+    """A plan is steerable when every sampled |steer curvature| is within (1 + this)·κ_max: the tracker's own
+    check (`tracking.config.ExecutorConfig.curvature_tolerance`, same default, pinned by a test)."""
+    sample_ds_m: float = 0.05
+    """Spacing of the plan samples costed and checked (m): the tracker's reference spacing
+    (`tracking.config.ExecutorConfig.reference_ds_m`), so the steering check sees what the tracker sees."""
 
     def __post_init__(self) -> None:
         if not self.margins_m or min(self.margins_m) < 0:
@@ -161,15 +168,15 @@ def drive_length(rows: np.ndarray, weights: ChoiceWeights) -> float:
     return float(np.sum(ds / np.minimum(cruise, curve)) * weights.forward_speed_mps)
 
 
-def plan_cost(plan: Plan, scene: Scene, vehicle: VehicleSpec, weights: ChoiceWeights,
-              ds_m: float = 0.05) -> tuple[bool, float]:
+def plan_cost(plan: Plan, scene: Scene, vehicle: VehicleSpec, weights: ChoiceWeights) -> tuple[bool, float]:
     """(steering beyond κ_max, cost) of a successful plan; lower is better, steerable plans first.
 
-    Steering: |steer curvature| of ``Plan.sample(ds_m)`` within 1.05 κ_max, the tracker's own check (its
-    reference spacing and 5 % slack). Cost: ``drive_length`` + reversal, clearance and terminal-heading terms of
+    Steering: |steer curvature| of ``Plan.sample(weights.sample_ds_m)`` within (1 + ``curvature_tolerance``)·κ_max,
+    the tracker's own check. Cost: ``drive_length`` + reversal, clearance and terminal-heading terms of
     ``weights``."""
-    rows = plan.sample(ds_m)
-    too_sharp = not bool(np.all(np.abs(rows[:, 3]) <= 1.05 * vehicle.kappa_max))
+    rows = plan.sample(weights.sample_ds_m)
+    limit = (1.0 + weights.curvature_tolerance) * vehicle.kappa_max
+    too_sharp = not bool(np.all(np.abs(rows[:, 3]) <= limit))
     level = clearance_level(scene, rows[:, :3], vehicle, weights.margins_m)
     if level < 0:
         steps = sorted(weights.margins_m)

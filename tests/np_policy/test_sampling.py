@@ -123,3 +123,12 @@ def test_bad_settings_are_named():
         ChoiceWeights(margins_m=(0.1, -0.2))
     with pytest.raises(ValueError, match="reverse_speed_mps: expected > 0"):
         ChoiceWeights(reverse_speed_mps=0.0)
+
+
+def test_the_steering_check_is_the_trackers():
+    """The choice's steerability check uses the tracker's own slack and reference spacing."""
+    from tracking.config import ExecutorConfig
+
+    weights, executor = ChoiceWeights(), ExecutorConfig()
+    assert weights.curvature_tolerance == executor.curvature_tolerance
+    assert weights.sample_ds_m == executor.reference_ds_m
