@@ -3,7 +3,8 @@ Table ``tab:realworld``, App. C, Fig. ``fig:searchtime``; SPEC §8).
 
 ``python -m experiments.closed_loop --clips [--clips-limit N | --clip-names NAME ...] [--planners neuralparker
 neuralparker_footprint np_guided_astar hybrid_astar] [--checkpoint PATH] [--footprint-checkpoint PATH] [--no-render]
-[--render-clips K] [--out DIR] [--workers N] [--controller lqr] [--footprint-samples N]``
+[--render-clips K] [--out DIR] [--workers N] [--controller lqr] [--connector C] [--footprint-connector C]
+[--footprint-samples N]``
 
 For every evaluation clip and planner, `tracking.clip_run.run_clip` starts the MuJoCo vehicle at the clip's start
 pose in the clip's ground truth (static objects, moving pedestrians and carts, the site boundary as walls), plans
@@ -14,7 +15,7 @@ records both verdicts: **footprint success** (no chassis contact with a ground-t
 object nor outside the boundary). Planners: NeuralParker (the site checkpoint, paper-faithful reference-point
 training), "NeuralParker (footprint)" (``checkpoints/site_np_footprint.pt``, trained under the footprint
 convention, playing the best of its mean rollout and ``--footprint-samples`` seeded sampled rollouts,
-`np_policy.sampling`; by default its row is left out with a note when the file is missing), NP-Guided A* and
+`np_policy.sampling`, with the ``centred`` connector order; by default its row is left out with a note when the file is missing), NP-Guided A* and
 Hybrid A* (both searching under the footprint convention).
 
 The table is the ``tab:realworld`` analogue — footprint success with reference-point success in parentheses, L
@@ -45,6 +46,7 @@ import numpy as np
 from tqdm import tqdm
 
 from experiments.common import git_commit, run_folder, write_records
+from np_sim.config import CONNECTOR_VARIANTS
 
 PLANNERS = ("neuralparker", "neuralparker_footprint", "np_guided_astar", "hybrid_astar")
 """Planners of the table, in the paper's row order (the footprint-aware NeuralParker after the paper-faithful one)."""
@@ -60,6 +62,12 @@ FOOTPRINT_SAMPLES = 32
 """Default sampled rollouts of NeuralParker (footprint), set on the first 94 difficult training clips, not on the
 held-out ones: executed footprint success 0.59 with none, 0.73 with 16 and 0.81 with 32 (length cost), 0.83 with 32
 and the drive-time cost, 0.78 with 64 (SE of 94 clips ≈ 0.04; README, "Best-of-N NeuralParker")."""
+FOOTPRINT_CONNECTOR = "centred"
+"""NeuralParker (footprint)'s terminal connector: the checkpoint's fixed nine tried target-aligned first
+(`np_sim.config.ConnectorConfig.variant`). The paper's order ends plans 10° off the target whenever the 80°
+candidate is feasible, on the edge of the 10° parking tolerance: on the held-out clips the tracker then lands a few
+tenths of a degree beyond it and replans the same manoeuvre until the time is up (3 clips). Neutral on the 94
+training clips (0.82 vs 0.83); README, "Best-of-N NeuralParker"."""
 PAPER = {"neuralparker": "0.60 (0.93) | 7.0 | 1.20 | 0.37", "np_guided_astar": "0.72 | 7.7 | 1.17 | 4.24",
          "hybrid_astar": "0.67 | 7.2 | 1.13 | 5.26"}
 """Table tab:realworld (real vehicle, C++ plan times): succ. | L | Rev. | plan time (ms)."""
@@ -76,7 +84,10 @@ class PlannerSettings:
     search_margin_m: float = 0.0
     """Hybrid A* and NP-Guided A*'s search plan for the footprint grown by this on every side (m)."""
     connector: str | None = None
-    """'fixed' or 'ensemble' overrides the NeuralParker checkpoints' terminal connector; None keeps it."""
+    """Terminal connector of the paper-faithful NeuralParker (and NP-Guided A*'s policy stage): 'fixed',
+    'ensemble' or 'centred' overrides the checkpoint's (`np_sim.config.ConnectorConfig.variant`); None keeps it."""
+    footprint_connector: str | None = FOOTPRINT_CONNECTOR
+    """The same for NeuralParker (footprint); default 'centred'."""
     footprint_samples: int = FOOTPRINT_SAMPLES
     """NeuralParker (footprint) plays the best of its mean rollout and this many sampled rollouts
     (`np_policy.sampling`); 0 = the paper's mean-action planner."""
@@ -122,8 +133,8 @@ def build_planners(names: list[str], settings: PlannerSettings) -> dict[str, Any
         else:  # neuralparker_footprint
             from np_policy.planner import NeuralParkerPlanner
 
-            planners[name] = NeuralParkerPlanner.from_checkpoint(settings.footprint_checkpoint, settings.connector,
-                                                                 samples=settings.footprint_samples)
+            planners[name] = NeuralParkerPlanner.from_checkpoint(
+                settings.footprint_checkpoint, settings.footprint_connector, samples=settings.footprint_samples)
     return planners
 
 
@@ -204,6 +215,9 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
     if "neuralparker_footprint" in names and settings.footprint_samples:
         notes.append(f"NeuralParker (footprint) plays the best of its mean rollout and {settings.footprint_samples} "
                      f"sampled rollouts (np_policy.sampling; --footprint-samples 0 = the paper's planner).")
+    if "neuralparker_footprint" in names and settings.footprint_connector:
+        notes.append(f"NeuralParker (footprint)'s terminal connector: {settings.footprint_connector} "
+                     f"(--footprint-connector; centred = the fixed nine candidates, target-aligned first).")
     build_planners(names, settings)  # fail fast on a bad setting, before any work
     clips = load_clips("eval")
     if clip_names:
@@ -248,6 +262,7 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
         "search_convention": SEARCH_CONVENTION, "clips": [clips[k].name for k in indices], "controller": controller,
         "render_clips": render_clips if render else 0, "workers": workers, "wall_time_s": wall,
         "search_margin_m": settings.search_margin_m, "connector": settings.connector,
+        "footprint_connector": settings.footprint_connector if "neuralparker_footprint" in names else None,
         "clip_run": _clip_run_config(clip_config),
         "git_commit": git_commit()},
         indent=2, default=str))
@@ -382,9 +397,14 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--search-margin", type=float, default=0.0, metavar="M",
                         help="Hybrid A* and NP-Guided A*'s search plan for the footprint grown by M metres on every "
                              "side (default 0)")
-    parser.add_argument("--connector", choices=("fixed", "ensemble"), default=None,
+    parser.add_argument("--connector", choices=CONNECTOR_VARIANTS, default=None,
                         help="NeuralParker's terminal connector (default: the checkpoint's, the site's fixed nine "
-                             "candidates; ensemble = the paper's 81-candidate ensemble, an evaluation-only swap)")
+                             "candidates; ensemble = the paper's 81-candidate ensemble, an evaluation-only swap; "
+                             "centred = the fixed nine tried target-aligned first)")
+    parser.add_argument("--footprint-connector", choices=CONNECTOR_VARIANTS, default=FOOTPRINT_CONNECTOR,
+                        help=f"the same for NeuralParker (footprint) (default {FOOTPRINT_CONNECTOR}: its plans end on "
+                             f"the target heading whenever that candidate is feasible, not 10° off it at the edge of "
+                             f"the parking tolerance)")
     parser.add_argument("--footprint-samples", type=int, default=FOOTPRINT_SAMPLES, metavar="N",
                         help=f"NeuralParker (footprint) plays the best of its mean rollout and N seeded sampled "
                              f"rollouts, chosen by steerability, then drive time + clearance + reversal + "
@@ -393,7 +413,7 @@ def main(argv=None) -> dict[str, Any]:
     args = parser.parse_args(argv)
     settings = PlannerSettings(checkpoint=args.checkpoint, footprint_checkpoint=args.footprint_checkpoint,
                                search_margin_m=args.search_margin, connector=args.connector,
-                               footprint_samples=args.footprint_samples)
+                               footprint_connector=args.footprint_connector, footprint_samples=args.footprint_samples)
     result = run(args.planners, settings, args.clips_limit, args.render_clips, not args.no_render, args.out,
                  args.workers, args.controller, clip_names=args.clip_names, replan=args.replan,
                  track_window=args.track_window)

@@ -1,11 +1,12 @@
 """Evaluate NeuralParker checkpoints on a benchmark's frozen test starts (paper §III-A protocol, Table I style).
 
-``python -m experiments.evaluate --benchmark factorial --checkpoints a.pt [b.pt c.pt] [--connector fixed|ensemble]
-[--samples N] [--out DIR]``
+``python -m experiments.evaluate --benchmark factorial --checkpoints a.pt [b.pt c.pt]
+[--connector fixed|ensemble|centred] [--samples N] [--out DIR]``
 
 Each checkpoint is one training seed. Every frozen start (1,080 Factorial, 720 Topology-Stress) is planned with
 the deterministic policy and the checkpoint's environment rules (``--connector`` swaps the terminal connector at
-evaluation time only: the paper's "ensemble, evaluation only" row; ``--samples N`` plans with the best of the mean
+evaluation time only: the paper's "ensemble, evaluation only" row; ``centred`` is the fixed nine tried
+target-aligned first, `np_sim.config.ConnectorConfig.variant`; ``--samples N`` plans with the best of the mean
 rollout and N seeded sampled rollouts, `np_policy.sampling`, beyond the paper). Success is on the full set; path
 length L, reversals and Δκ (eq:metrics) on the common-success cohort — here the episodes every evaluated seed
 solved — reported as the mean ± sample SD over seeds; plan time as median and 90th percentile. Writes
@@ -25,6 +26,7 @@ from tqdm import tqdm
 from experiments.common import git_commit, mean_sd, run_folder, write_records
 from np_policy.planner import NeuralParkerPlanner
 from np_sim.benchmarks import frozen_starts, load_benchmark
+from np_sim.config import CONNECTOR_VARIANTS
 
 
 def evaluate(benchmark: str, checkpoints: list[Path], connector: str | None = None, out: Path | None = None,
@@ -43,7 +45,7 @@ def evaluate(benchmark: str, checkpoints: list[Path], connector: str | None = No
             L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))
             records.append({"scene": scenes[k].name, "start_id": j,
                             "method": f"NeuralParker, best of 1 + {samples}" if samples else "NeuralParker",
-                            "connector": planner.config.env.connector.mode, "checkpoint": str(path),
+                            "connector": connector or planner.config.env.connector.mode, "checkpoint": str(path),
                             "seed": planner.config.seed, "seed_index": seed_index, "success": int(plan.success),
                             "reason": plan.reason, "L": L, "reversals": rev, "delta_kappa": dk,
                             "plan_time_ms": 1e3 * plan.plan_time_s})
@@ -78,7 +80,8 @@ def main(argv=None) -> dict[str, Any]:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
     parser.add_argument("--checkpoints", type=Path, nargs="+", required=True, help="one checkpoint per seed")
-    parser.add_argument("--connector", choices=["fixed", "ensemble"], help="override the terminal connector")
+    parser.add_argument("--connector", choices=CONNECTOR_VARIANTS,
+                        help="override the terminal connector (centred: the fixed nine, target-aligned first)")
     parser.add_argument("--samples", type=int, default=0, metavar="N",
                         help="plan with the best of the mean rollout and N seeded sampled rollouts (default 0: the "
                              "paper's deterministic planner)")

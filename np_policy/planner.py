@@ -57,14 +57,15 @@ class NeuralParkerPlanner:
                         weights: ChoiceWeights | None = None, seed: int = 0) -> "NeuralParkerPlanner":
         """Rebuild the network and env config stored in a checkpoint (CheckpointError on a bad file).
 
-        ``connector`` ('fixed' or 'ensemble') replaces the checkpoint's terminal connector (paper §III-E: the
-        81-candidate ensemble used at evaluation only); None keeps it. ``samples``, ``weights``, ``seed``: best-of-N
+        ``connector`` ('fixed', 'ensemble' or 'centred', `np_sim.config.ConnectorConfig.variant`) replaces the
+        checkpoint's terminal connector (paper §III-E: the 81-candidate ensemble used at evaluation only); None
+        keeps it. ``samples``, ``weights``, ``seed``: best-of-N
         sampled rollouts (module docstring; 0 = the paper's planner)."""
         payload = load_checkpoint(path)
         config = TrainConfig.from_dict(payload["config"])
         if connector is not None:
             env = config.env
-            env = dataclasses.replace(env, connector=dataclasses.replace(env.connector, mode=connector))
+            env = dataclasses.replace(env, connector=env.connector.variant(connector))
             config = dataclasses.replace(config, env=env)
         model = ActorCritic(config.env.observation, config.network)
         model.load_state_dict(payload["model"])

@@ -19,6 +19,8 @@ from np_sim.vehicle import VehicleSpec
 
 Convention = Literal["reference_point", "footprint"]
 ConnectorMode = Literal["ensemble", "fixed"]
+CONNECTOR_VARIANTS = ("fixed", "ensemble", "centred")
+"""What a planner's ``connector`` override may name: the two modes, or ``"centred"`` (`ConnectorConfig.variant`)."""
 
 
 @dataclass(frozen=True)
@@ -75,6 +77,20 @@ class ConnectorConfig:
     """Constant of eq:mincost."""
     heading_gate: bool = True
     """Only connect when sin θ̃ > 0 at the reached state."""
+
+    def variant(self, name: str) -> "ConnectorConfig":
+        """This connector as ``name`` (one of `CONNECTOR_VARIANTS`): ``"fixed"`` / ``"ensemble"`` set the mode;
+        ``"centred"`` (beyond the paper) is the fixed mode with the same nine candidates tried target-aligned first
+        — offsets by |offset|, headings by |heading − 90°|, ties in the listed order — so the first feasible one
+        ends on the target pose when that one is feasible, where the paper's order (80° first) ends 10° off it,
+        exactly at the closed loop's parking tolerance. Which starts connect does not change (any feasible
+        candidate connects); only the chosen terminal segment does."""
+        if name not in CONNECTOR_VARIANTS:
+            raise ConfigError(f"connector: expected one of {CONNECTOR_VARIANTS}, got {name!r}")
+        if name != "centred":
+            return dataclasses.replace(self, mode=name)
+        return dataclasses.replace(self, mode="fixed", offsets_m=tuple(sorted(self.offsets_m, key=abs)),
+                                   headings_deg=tuple(sorted(self.headings_deg, key=lambda h: abs(h - 90.0))))
 
     def arrays(self):
         """(offsets, headings_rad, scales0, scales1) as float arrays for the kernels."""

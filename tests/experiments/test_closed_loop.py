@@ -6,7 +6,7 @@ import json
 import pytest
 import torch
 
-from experiments.closed_loop import main
+from experiments.closed_loop import PlannerSettings, build_planners, main
 from np_policy.checkpoint import save_checkpoint
 from np_policy.network import ActorCritic
 from np_policy.train import TrainConfig, benchmark_defaults
@@ -80,13 +80,20 @@ def test_two_workers_give_the_records_of_one(tmp_path, site_checkpoint):
     assert [[r[k] for k in keys] for r in two] == [[r[k] for k in keys] for r in one]
 
 
-def test_footprint_samples_reach_the_planner_and_the_config(tmp_path):
+def test_footprint_samples_and_connector_reach_the_planner_and_the_config(tmp_path):
     out = tmp_path / "run"
     main(["--clips", "--clip-names", KNOWN_FEASIBLE, "--planners", "neuralparker_footprint", "--no-render",
           "--footprint-samples", "4", "--out", str(out)])
     config = json.loads((out / "config.json").read_text())
-    assert config["footprint_samples"] == 4
-    assert "best of its mean rollout and 4 sampled rollouts" in (out / "table.md").read_text()
+    assert config["footprint_samples"] == 4 and config["footprint_connector"] == "centred"
+    table = (out / "table.md").read_text()
+    assert "best of its mean rollout and 4 sampled rollouts" in table and "terminal connector: centred" in table
+    settings = PlannerSettings(footprint_connector="fixed", footprint_samples=0)
+    planner = build_planners(["neuralparker_footprint"], settings)["neuralparker_footprint"]
+    assert planner.config.env.connector.headings_deg == (80.0, 90.0, 100.0)  # the checkpoint's, the paper's order
+    planner = build_planners(["neuralparker_footprint"], PlannerSettings())["neuralparker_footprint"]
+    assert planner.config.env.connector.headings_deg == (90.0, 80.0, 100.0)
+    assert planner.config.env.connector.mode == "fixed"
     with pytest.raises(ValueError, match="--footprint-samples: expected >= 0"):
         main(["--clips", "--clips-limit", "1", "--planners", "neuralparker_footprint", "--footprint-samples", "-1",
               "--out", str(tmp_path / "bad")])

@@ -7,6 +7,7 @@ import pytest
 from shapely.geometry import Point, Polygon
 
 from np_sim.config import ConnectorConfig
+from np_sim.errors import ConfigError
 from np_sim.frames import from_target_frame, pose_to_target_frame
 from np_sim.hermite import _candidate_sets, connect, discrete_curvature, hermite_curve
 from np_sim.scene import Scene
@@ -86,9 +87,9 @@ def test_curvature_bound_rejects_tight_connections():
     assert connect(scene, [1.5, -0.5, math.pi / 2 - 0.2], 0.0) is None
 
 
-def _brute_force_selection(scene, pose, prev_kappa, mode):
+def _brute_force_selection(scene, pose, prev_kappa, mode, cfg=None):
     """Check every candidate with shapely (reference-point convention) and pick by eq:mincost / first feasible."""
-    cfg = ConnectorConfig(mode=mode)
+    cfg = ConnectorConfig(mode=mode) if cfg is None else cfg
     cands = _candidate_sets(cfg)
     pose_t = pose_to_target_frame(np.asarray(pose, float), scene.target)
     if not math.sin(pose_t[2]) > 0:
@@ -154,3 +155,50 @@ def test_fixed_connector_takes_first_feasible_in_offset_then_heading_order():
     # the ensemble picks by cost instead: the straight (0 m, 90°) family is cheaper than candidate 2
     e = connect(scene, start, 0.0, "ensemble")
     assert e.cost < c.cost and e.offset_m == 0.0
+
+
+def test_centred_variant_tries_the_target_aligned_candidate_first():
+    centred = ConnectorConfig(mode="fixed").variant("centred")
+    assert centred.mode == "fixed"
+    assert centred.offsets_m == (0.0, -0.1, 0.1) and centred.headings_deg == (90.0, 80.0, 100.0)
+    # the same nine candidates as the paper's order
+    paper = ConnectorConfig(mode="fixed")
+    assert sorted(centred.offsets_m) == sorted(paper.offsets_m)
+    assert sorted(centred.headings_deg) == sorted(paper.headings_deg)
+    assert ConnectorConfig().variant("fixed").mode == "fixed" and paper.variant("ensemble").mode == "ensemble"
+    start = [0.0, -8.0, math.pi / 2]
+    lot = Scene.from_dict(OPEN_LOT)
+    c = connect(lot, start, 0.0, "fixed", config=centred)
+    # the paper's order ends 10° off the target (test above); the centred one on it, at zero offset
+    assert c.index == 0 and c.offset_m == 0.0 and math.isclose(c.heading_rad, math.pi / 2)
+    end_t = pose_to_target_frame(c.terminal_pose, lot.target)
+    assert abs(end_t[0]) < 1e-12 and abs(end_t[2] - math.pi / 2) < 1e-12
+    # a block reaching right of the approach line: the (0 m, 90°) candidate passes through it, a later one does not
+    scene = Scene.from_dict(dict(OPEN_LOT, obstacles=[{"polygon": [[-1.0, -2.0], [0.05, -2.0], [0.05, -0.95],
+                                                                    [-1.0, -0.95]]}]))
+    blocked = connect(scene, start, 0.0, "fixed", config=centred)
+    assert blocked is not None and blocked.index != 0
+    assert blocked.index == _brute_force_selection(scene, start, 0.0, "fixed", centred)
+
+
+def test_centred_variant_connects_exactly_where_the_paper_order_does():
+    from np_sim.examples import example_scenes
+
+    rng = np.random.default_rng(11)
+    paper, centred = ConnectorConfig(mode="fixed"), ConnectorConfig(mode="fixed").variant("centred")
+    both = 0
+    for scene in example_scenes():
+        tx, ty, tth = scene.target
+        for _ in range(40):
+            r, ang = rng.uniform(2, 10), rng.uniform(-math.pi, math.pi)
+            pose = np.array([tx + r * math.cos(ang), ty + r * math.sin(ang), tth + rng.normal(0, 0.6)])
+            a = connect(scene, pose, 0.2, "fixed", config=paper)
+            b = connect(scene, pose, 0.2, "fixed", config=centred)
+            assert (a is None) == (b is None), (scene.name, pose.tolist())
+            both += a is not None
+    assert both >= 10
+
+
+def test_unknown_connector_variant_is_named():
+    with pytest.raises(ConfigError, match="connector: expected one of .*'centered'"):
+        ConnectorConfig().variant("centered")
