@@ -89,5 +89,7 @@ def test_the_connector_can_be_swapped_at_load_and_a_bad_mode_is_named(planner, t
     fixed = NeuralParkerPlanner.from_checkpoint(ckpt, "fixed")
     assert fixed.config.env.connector.mode == "fixed"
     assert fixed.config.env.connector.n_candidates < planner.config.env.connector.n_candidates
-    with pytest.raises(ConfigError, match="ConnectorConfig.mode"):
+    centred = NeuralParkerPlanner.from_checkpoint(ckpt, "centred").config.env.connector
+    assert centred.mode == "fixed" and centred.headings_deg == (90.0, 80.0, 100.0)
+    with pytest.raises(ConfigError, match=r"connector: expected one of \('fixed', 'ensemble', 'centred'\), got 'spline'"):
         NeuralParkerPlanner.from_checkpoint(ckpt, "spline")

@@ -19,8 +19,8 @@ CHECKPOINT = "checkpoints/site_np_footprint.pt"
 
 @pytest.fixture(scope="module")
 def problem():
-    """eval-1000008 at frame 0: the mean rollout of the shipped footprint checkpoint fails there."""
-    clip = next(c for c in load_clips("eval") if c.name == "eval-1000008")
+    """eval-1000024 at frame 0: the mean rollout of the shipped footprint checkpoint fails there."""
+    clip = next(c for c in load_clips("eval") if c.name == "eval-1000024")
     start = np.asarray(clip.start, float)
     return clip.frame_scene(0, pose=start), start
 
