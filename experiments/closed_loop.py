@@ -15,8 +15,8 @@ records both verdicts: **footprint success** (no chassis contact with a ground-t
 object nor outside the boundary). Planners: NeuralParker (the site checkpoint, paper-faithful reference-point
 training), "NeuralParker (footprint)" (``checkpoints/site_np_footprint.pt``, trained under the footprint
 convention, playing the best of its mean rollout and ``--footprint-samples`` seeded sampled rollouts,
-`np_policy.sampling`, with the ``centred`` connector order; by default its row is left out with a note when the file is missing), NP-Guided A* and
-Hybrid A* (both searching under the footprint convention).
+`np_policy.sampling`, with the ``centred`` connector order; by default its row is left out with a note when the
+file is missing), NP-Guided A* and Hybrid A* (both searching under the footprint convention).
 
 The table is the ``tab:realworld`` analogue — footprint success with reference-point success in parentheses, L
 and reversals executed on each method's own footprint successes, median plan time over all calls — plus

@@ -70,7 +70,8 @@ def main(argv=None) -> dict:
     parser.add_argument("--episodes", type=int, help="seeded subset of the 1,080 frozen starts (default all)")
     parser.add_argument("--seed", type=int, default=0, help="subset seed")
     parser.add_argument("--samples", type=int, default=0, metavar="N",
-                        help="time the best of the mean rollout and N sampled rollouts (default 0: the paper's planner)")
+                        help="time the best of the mean rollout and N sampled rollouts (default 0: the paper's "
+                             "planner)")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     args = parser.parse_args(argv)
     result = measure(args.checkpoint, args.episodes, args.seed, args.samples)

@@ -59,8 +59,8 @@ class NeuralParkerPlanner:
 
         ``connector`` ('fixed', 'ensemble' or 'centred', `np_sim.config.ConnectorConfig.variant`) replaces the
         checkpoint's terminal connector (paper §III-E: the 81-candidate ensemble used at evaluation only); None
-        keeps it. ``samples``, ``weights``, ``seed``: best-of-N
-        sampled rollouts (module docstring; 0 = the paper's planner)."""
+        keeps it. ``samples``, ``weights``, ``seed``: best-of-N sampled rollouts (module docstring; 0 = the paper's
+        planner)."""
         payload = load_checkpoint(path)
         config = TrainConfig.from_dict(payload["config"])
         if connector is not None:

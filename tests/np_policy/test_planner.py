@@ -91,5 +91,6 @@ def test_the_connector_can_be_swapped_at_load_and_a_bad_mode_is_named(planner, t
     assert fixed.config.env.connector.n_candidates < planner.config.env.connector.n_candidates
     centred = NeuralParkerPlanner.from_checkpoint(ckpt, "centred").config.env.connector
     assert centred.mode == "fixed" and centred.headings_deg == (90.0, 80.0, 100.0)
-    with pytest.raises(ConfigError, match=r"connector: expected one of \('fixed', 'ensemble', 'centred'\), got 'spline'"):
+    expected = r"connector: expected one of \('fixed', 'ensemble', 'centred'\), got 'spline'"
+    with pytest.raises(ConfigError, match=expected):
         NeuralParkerPlanner.from_checkpoint(ckpt, "spline")

@@ -119,6 +119,14 @@ def _brute_force_selection(scene, pose, prev_kappa, mode, cfg=None):
     return min(feasible, key=lambda c: (costs[c], c))
 
 
+def _poses_near_target(scene, rng, n=40):
+    """n poses 2–10 m from the target, heading roughly along the target's heading."""
+    tx, ty, tth = scene.target
+    for _ in range(n):
+        r, ang = rng.uniform(2, 10), rng.uniform(-math.pi, math.pi)
+        yield np.array([tx + r * math.cos(ang), ty + r * math.sin(ang), tth + rng.normal(0, 0.6)])
+
+
 @pytest.mark.parametrize("mode", ["ensemble", "fixed"])
 def test_selection_equals_checking_every_candidate(mode):
     from np_sim.examples import example_scenes
@@ -126,11 +134,7 @@ def test_selection_equals_checking_every_candidate(mode):
     rng = np.random.default_rng(7)
     checked = found = 0
     for scene in example_scenes():
-        tx, ty, tth = scene.target
-        for _ in range(40):
-            # poses 2–10 m from the target, heading roughly towards its heading, in target-frame terms
-            r, ang = rng.uniform(2, 10), rng.uniform(-math.pi, math.pi)
-            pose = np.array([tx + r * math.cos(ang), ty + r * math.sin(ang), tth + rng.normal(0, 0.6)])
+        for pose in _poses_near_target(scene, rng):
             pose_t = pose_to_target_frame(pose, scene.target)
             expected = _brute_force_selection(scene, pose, 0.2, mode)
             got = connect(scene, pose, 0.2, mode)
@@ -188,10 +192,7 @@ def test_centred_variant_connects_exactly_where_the_paper_order_does():
     paper, centred = ConnectorConfig(mode="fixed"), ConnectorConfig(mode="fixed").variant("centred")
     both = 0
     for scene in example_scenes():
-        tx, ty, tth = scene.target
-        for _ in range(40):
-            r, ang = rng.uniform(2, 10), rng.uniform(-math.pi, math.pi)
-            pose = np.array([tx + r * math.cos(ang), ty + r * math.sin(ang), tth + rng.normal(0, 0.6)])
+        for pose in _poses_near_target(scene, rng):
             a = connect(scene, pose, 0.2, "fixed", config=paper)
             b = connect(scene, pose, 0.2, "fixed", config=centred)
             assert (a is None) == (b is None), (scene.name, pose.tolist())
