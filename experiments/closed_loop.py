@@ -175,10 +175,24 @@ _WORKER: dict[str, Any] = {}
 """Per-process state of the worker pool: clips and planners, built once per process."""
 
 
-def _init_worker(names: list[str], settings: PlannerSettings) -> None:
-    from np_sim.clips import load_clips
+CLIP_SPLITS = ("eval", "train-difficult")
+"""Clip sets ``run`` drives: the 47 held-out clips, or the difficult training clips in clip order (where the
+footprint-aware planner's settings were tuned; the first 94 are left out of its recorded training resets)."""
 
-    _WORKER["clips"] = load_clips("eval")
+
+def split_clips(split: str) -> list:
+    """The clips of ``split`` (``CLIP_SPLITS``)."""
+    from np_sim.clips import difficult_clips, load_clips
+
+    if split == "eval":
+        return load_clips("eval")
+    if split == "train-difficult":
+        return difficult_clips("train")
+    raise ValueError(f"--split: expected one of {CLIP_SPLITS}, got {split!r}")
+
+
+def _init_worker(names: list[str], settings: PlannerSettings, split: str) -> None:
+    _WORKER["clips"] = split_clips(split)
     _WORKER["planners"] = build_planners(names, settings)
 
 
@@ -190,14 +204,15 @@ def _work(args) -> list[dict]:
 def run(planners: list[str] | None = None, settings: PlannerSettings | None = None, clips_limit: int | None = None,
         render_clips: int = 3, render: bool = True, out: Path | None = None, workers: int = 1,
         controller: str = "lqr", rrd: bool = True, progress: bool = True,
-        clip_names: list[str] | None = None, replan: str = "on_invalid", track_window: int = 1) -> dict[str, Any]:
+        clip_names: list[str] | None = None, replan: str = "on_invalid", track_window: int = 1,
+        split: str = "eval") -> dict[str, Any]:
     """Run the clips × planners; returns records, table text, folder and notes (see the module docstring).
+    ``split`` picks the clip set (``CLIP_SPLITS``; the held-out clips by default).
     ``planners=None`` runs all of them, leaving out the footprint-aware NeuralParker (with a note) when
     ``settings.footprint_checkpoint`` is missing; a planner named explicitly must have its checkpoint.
     ``track_window`` is the perception filter (off by default, as on the paper's vehicle)."""
     from tracking.clip_run import ClipRunConfig
 
-    from np_sim.clips import load_clips
     from tracking.controllers import CONTROLLERS
 
     if controller not in CONTROLLERS:
@@ -219,12 +234,12 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
         notes.append(f"NeuralParker (footprint)'s terminal connector: {settings.footprint_connector} "
                      f"(--footprint-connector; centred = the fixed nine candidates, target-aligned first).")
     build_planners(names, settings)  # fail fast on a bad setting, before any work
-    clips = load_clips("eval")
+    clips = split_clips(split)
     if clip_names:
         known = {c.name: k for k, c in enumerate(clips)}
         missing = [n for n in clip_names if n not in known]
         if missing:
-            raise ValueError(f"--clip-names: {missing} are not evaluation clips (eval-1000001 … {clips[-1].name})")
+            raise ValueError(f"--clip-names: {missing} are not {split} clips ({clips[0].name} … {clips[-1].name})")
         indices = [known[n] for n in clip_names]
     else:
         indices = list(range(len(clips)))[:clips_limit]
@@ -235,7 +250,7 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
     bar = tqdm(total=len(jobs) * len(names), desc="clips × planners in MuJoCo", unit="run", disable=not progress)
     results: list[list[dict]] = []
     if workers == 1:
-        _init_worker(names, settings)
+        _init_worker(names, settings, split)
         for job in jobs:
             results.append(_work(job))
             bar.update(len(names))
@@ -243,14 +258,14 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
         # spawn, not fork: the parent has torch's thread pool up (build_planners above), and a forked child can
         # deadlock on its locks (it did: --workers 2 hung with idle workers)
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init_worker,
-                                 initargs=(names, settings)) as pool:
+                                 initargs=(names, settings, split)) as pool:
             for rows in pool.map(_work, jobs):  # in clip order, so the records do not depend on the workers
                 results.append(rows)
                 bar.update(len(names))
     bar.close()
     wall = time.perf_counter() - wall0
     records = [row for rows in results for row in rows]
-    table = format_table(records, names) + "\n\n" + "\n".join(notes)
+    table = format_table(records, names, split) + "\n\n" + "\n".join(notes)
     write_records(folder, records)
     (folder / "table.md").write_text(table.strip() + "\n")
     figure = search_time_figure(records, folder / "search_time.png")
@@ -259,7 +274,8 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
         "planners": names, "checkpoint": str(settings.checkpoint),
         "footprint_checkpoint": str(footprint) if "neuralparker_footprint" in names else None,
         "footprint_samples": settings.footprint_samples if "neuralparker_footprint" in names else None,
-        "search_convention": SEARCH_CONVENTION, "clips": [clips[k].name for k in indices], "controller": controller,
+        "search_convention": SEARCH_CONVENTION, "split": split, "clips": [clips[k].name for k in indices],
+        "controller": controller,
         "render_clips": render_clips if render else 0, "workers": workers, "wall_time_s": wall,
         "search_margin_m": settings.search_margin_m, "connector": settings.connector,
         "footprint_connector": settings.footprint_connector if "neuralparker_footprint" in names else None,
@@ -288,10 +304,11 @@ def _mean(values) -> float:
     return float(np.mean(v)) if len(v) else math.nan
 
 
-def format_table(records: list[dict], names: list[str]) -> str:
+def format_table(records: list[dict], names: list[str], split: str = "eval") -> str:
     """Markdown: the tab:realworld analogue, the closed-loop columns and the paper's real-vehicle figures."""
     n = len({r["clip"] for r in records})
-    lines = [f"Closed loop on {n} held-out site clips (MuJoCo, LQR tracker, replanning from the simulated pose).", "",
+    which = "held-out" if split == "eval" else "difficult training"
+    lines = [f"Closed loop on {n} {which} site clips (MuJoCo, LQR tracker, replanning from the simulated pose).", "",
              "| Method | Succ. footprint (ref. point) | L (m) | Rev. | Plan time median (ms) | first-frame plan "
              "time median (ms) | Paper: Succ. / L / Rev. / ms |", "|---|---|---|---|---|---|---|"]
     for name in names:
@@ -372,6 +389,9 @@ def main(argv=None) -> dict[str, Any]:
     parser = argparse.ArgumentParser(prog="python -m experiments.closed_loop", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--clips", action="store_true", required=True, help="run the 47 held-out site clips")
+    parser.add_argument("--split", choices=CLIP_SPLITS, default="eval",
+                        help="clip set: the 47 held-out clips (default), or the 304 difficult training clips in "
+                             "clip order (the tuning set of the footprint-aware planner: add --clips-limit 94)")
     parser.add_argument("--clips-limit", type=int, default=None, help="only the first N clips")
     parser.add_argument("--clip-names", nargs="+", default=None, help="only these clips (e.g. eval-1000016)")
     parser.add_argument("--planners", nargs="+", choices=PLANNERS, default=None,
@@ -416,7 +436,7 @@ def main(argv=None) -> dict[str, Any]:
                                footprint_connector=args.footprint_connector, footprint_samples=args.footprint_samples)
     result = run(args.planners, settings, args.clips_limit, args.render_clips, not args.no_render, args.out,
                  args.workers, args.controller, clip_names=args.clip_names, replan=args.replan,
-                 track_window=args.track_window)
+                 track_window=args.track_window, split=args.split)
     folder = result["folder"]
     print(result["table"])
     print(f"\nwall time {result['wall_time_s']:.0f} s; results in {folder}/: records.csv, records.json, table.md, "

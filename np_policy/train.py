@@ -33,7 +33,7 @@ from np_policy.ppo import RunningMeanStd, compute_targets, make_optimizer, ppo_u
 from np_sim.config import EnvConfig, config_from_dict
 from np_sim.curriculum import CurriculumSchedule, CurriculumStartSampler
 from np_sim.env import ParkingVectorEnv
-from np_sim.clips import cached_training_pool
+from np_sim.clips import cached_training_pool, difficult_clips
 from np_sim.errors import ConfigError
 from np_sim.scene import Scene
 from np_sim.site import SITE_OBSERVATION
@@ -60,6 +60,13 @@ class TrainConfig:
     """Start poses per scene in the geodesic curriculum pool."""
     site_pool: int = 8192
     """Site only: (scene, start) training resets drawn once from the training clips (``np_sim.clips.training_pool``)."""
+    site_recorded_share: float = 0.0
+    """Site only, beyond the paper: this share of the pool are resets from the difficult training clips' own
+    recorded tasks (``np_sim.clips.sample_recorded_reset``: the clip's start, exact or perturbed, and target) instead
+    of App. C's random ones; 0 is the paper's pool."""
+    site_recorded_skip: int = 0
+    """Site only: the first this many difficult training clips (in clip order) are left out of the recorded resets,
+    so they can validate the result as clips the policy never started from."""
     env: EnvConfig = field(default_factory=EnvConfig)
     ppo: PPOConfig = field(default_factory=PPOConfig)
     network: NetworkConfig = field(default_factory=NetworkConfig)
@@ -69,6 +76,14 @@ class TrainConfig:
         if self.benchmark not in BENCHMARKS and not _is_scene_path(self.benchmark):
             raise ConfigError(f"TrainConfig.benchmark: expected one of {list(BENCHMARKS)} or the path of a scene "
                               f"JSON file or folder, got {self.benchmark!r}")
+        if not 0.0 <= self.site_recorded_share <= 1.0:
+            raise ConfigError(f"TrainConfig.site_recorded_share: expected a share in [0, 1], "
+                              f"got {self.site_recorded_share!r}")
+        if self.site_recorded_skip < 0:
+            raise ConfigError(f"TrainConfig.site_recorded_skip: expected >= 0 clips, got {self.site_recorded_skip!r}")
+        if self.site_recorded_share and self.benchmark != "site":
+            raise ConfigError(f"TrainConfig.site_recorded_share: recorded resets exist on the site only, got "
+                              f"benchmark {self.benchmark!r}")
         if self.benchmark == "site" and self.curriculum.enabled:
             raise ConfigError("TrainConfig.curriculum.enabled: the site trains from App. C resets (start and "
                               "detections drawn together), so the geodesic curriculum must be off; start from "
@@ -149,6 +164,16 @@ def training_scenes(benchmark: str):
     return load_benchmark(benchmark, "train")
 
 
+def recorded_clips(skip: int) -> list:
+    """The difficult training clips (`np_sim.clips.clip_difficulty`) after the first ``skip``: where recorded
+    resets come from (``TrainConfig.site_recorded_share``)."""
+    difficult = difficult_clips("train")
+    if skip >= len(difficult):
+        raise ConfigError(f"TrainConfig.site_recorded_skip: {skip} leaves none of the {len(difficult)} difficult "
+                          "training clips for recorded resets")
+    return difficult[skip:]
+
+
 class Trainer:
     """State of one training run: model, optimiser, envs, statistics, counters."""
 
@@ -160,9 +185,12 @@ class Trainer:
             torch.set_num_threads(config.torch_threads)
         torch.manual_seed(config.seed)
         if config.benchmark == "site":
+            recorded = recorded_clips(config.site_recorded_skip) if config.site_recorded_share else []
             self.scenes, starts = cached_training_pool(self.out / SITE_POOL_FILE, config.site_pool, config.seed,
                                                        observation=config.env.observation,
-                                                       vehicle=config.env.vehicle, progress=True)
+                                                       vehicle=config.env.vehicle, progress=True,
+                                                       recorded_share=config.site_recorded_share,
+                                                       recorded_clips=recorded)
             self.sampler = PairedStartSampler(starts)
             select_sampler = fixed_start_sampler(starts)
         else:

@@ -67,7 +67,7 @@ import json
 import math
 import pickle
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, NamedTuple, Sequence
@@ -1118,6 +1118,12 @@ def load_clips(split: str) -> list[Clip]:
     return list(_split_cached(split)[0])
 
 
+def difficult_clips(split: str) -> list[Clip]:
+    """The clips of ``split`` the difficulty rule marks difficult (`clip_difficulty`), in clip order: all 47 eval
+    clips; 304 of the 1,000 training clips."""
+    return [clip for clip in load_clips(split) if clip.difficulty.difficult]
+
+
 def split_statistics(split: str) -> SplitStatistics:
     """Candidate statistics of ``split`` (loads or generates it, see `load_clips`)."""
     _check_split(split)
@@ -1148,7 +1154,6 @@ def sample_training_scene(rng: np.random.Generator, clips: Sequence[Clip], *,
         _, polygons = clip.detections(frame)
         shapes = shapely.polygons(polygons) if len(polygons) else np.array([], dtype=object)
         site = clip.site
-        region, ring = ShapelyPolygon(site.boundary), LinearRing(site.boundary)
         target = None
         for index in rng.permutation(len(site.spots)):
             footprint = ShapelyPolygon(vehicle.footprint(site.spots[index].pose))
@@ -1162,9 +1167,8 @@ def sample_training_scene(rng: np.random.Generator, clips: Sequence[Clip], *,
         lo, hi = site.boundary.min(axis=0), site.boundary.max(axis=0)
         for _ in range(start_draws):
             start = np.array([*rng.uniform(lo, hi), rng.uniform(-math.pi, math.pi)])
-            footprint = ShapelyPolygon(vehicle.footprint(start))
-            if (not region.contains_properly(footprint) or footprint.distance(ring) <= 0.0
-                    or not footprint.disjoint(target_fp) or np.any(shapely.intersects(shapes, footprint))
+            if (not _start_fits(site, polygons, start, vehicle)
+                    or not ShapelyPolygon(vehicle.footprint(start)).disjoint(target_fp)
                     or math.isinf(_geodesic_at(grid, start[:2]))):
                 continue
             order = np.lexsort((np.arange(len(polygons)), polygon_distances(start[:2], polygons)))
@@ -1178,38 +1182,97 @@ def sample_training_scene(rng: np.random.Generator, clips: Sequence[Clip], *,
     raise RuntimeError(f"sample_training_scene: no valid target and start in {max_tries} clip/frame draws")
 
 
+def _start_fits(site: Site, polygons: np.ndarray, start: np.ndarray, vehicle: VehicleSpec) -> bool:
+    """The start footprint lies strictly inside the site boundary and touches no detection."""
+    footprint = ShapelyPolygon(vehicle.footprint(start))
+    if not ShapelyPolygon(site.boundary).contains_properly(footprint):
+        return False
+    if footprint.distance(LinearRing(site.boundary)) <= 0.0:
+        return False
+    return not (len(polygons) and np.any(shapely.intersects(shapely.polygons(polygons), footprint)))
+
+
+def sample_recorded_reset(rng: np.random.Generator, clips: Sequence[Clip], *, vehicle: VehicleSpec | None = None,
+                          exact_share: float = 1 / 3, position_sd_m: float = 0.5, heading_sd_deg: float = 10.0,
+                          max_tries: int = 200) -> tuple[Scene, np.ndarray]:
+    """One reset from a clip's own recorded task (beyond the paper; App. C draws start and target at random): a
+    random clip of ``clips`` and frame, the clip's target, and its recorded start — kept exactly with probability
+    ``exact_share``, else moved by Gaussian noise (sd ``position_sd_m`` per axis, ``heading_sd_deg``) — with the
+    scene the closed loop plans in from that pose (`Clip.frame_scene`: that frame's ten detections nearest to it).
+
+    The clips' starts are chosen hard (tight spots, target-averse headings, detours: `clip_difficulty`), which
+    uniform App. C starts rarely are; training on the training clips' own starts puts those situations into the
+    pool. A start whose footprint leaves the site, touches its boundary or a detection of the frame is drawn
+    again. Returns ``(scene, start_pose)``; RuntimeError after ``max_tries`` draws without a free start."""
+    if not clips:
+        raise ConfigError("sample_recorded_reset: expected at least one clip, got none")
+    vehicle = VehicleSpec() if vehicle is None else vehicle
+    for _ in range(max_tries):
+        clip = clips[int(rng.integers(len(clips)))]
+        frame = int(rng.integers(clip.n_frames))
+        start = np.array(clip.start, dtype=np.float64)
+        if rng.random() >= exact_share:
+            start[:2] += rng.normal(0.0, position_sd_m, 2)
+            start[2] = wrap_angle(start[2] + math.radians(rng.normal(0.0, heading_sd_deg)))
+        _, polygons = clip.detections(clip.detection_frame(frame))
+        if not _start_fits(clip.site, polygons, start, vehicle):
+            continue
+        scene = clip.frame_scene(frame, pose=start, vehicle=vehicle)
+        return replace(scene, name=f"{clip.name}/f{frame:03d}/recorded"), start
+    raise RuntimeError(f"sample_recorded_reset: no free start in {max_tries} clip/frame draws")
+
+
 def training_pool(n: int, seed: int, *, observation=SITE_OBSERVATION, vehicle: VehicleSpec | None = None,
-                  clips: Sequence[Clip] | None = None, progress: bool = False) -> tuple[list[Scene], np.ndarray]:
+                  clips: Sequence[Clip] | None = None, progress: bool = False, recorded_share: float = 0.0,
+                  recorded_clips: Sequence[Clip] = ()) -> tuple[list[Scene], np.ndarray]:
     """``n`` training resets of the site (paper App. C, `sample_training_scene`) drawn from ``clips`` (default: the
     1,000 training clips) with ``numpy.random.default_rng(seed)``: the scenes and their (n, 3) start poses, paired
     by index.
+
+    ``recorded_share`` > 0 (beyond the paper) replaces the last ``round(recorded_share · n)`` resets by
+    `sample_recorded_reset` draws from ``recorded_clips`` (own generator ``default_rng([seed, 1])``), so the App. C
+    part is the same as in a pool drawn without them.
 
     Training samples resets from this fixed pool (each env reset picks one pair uniformly), so a run is
     reproducible and resumable without storing scenes; a larger pool is closer to a fresh draw per reset.
     """
     if n < 1:
         raise ConfigError(f"training_pool: expected n >= 1 resets, got {n}")
+    if not 0.0 <= recorded_share <= 1.0:
+        raise ConfigError(f"training_pool: recorded_share must be in [0, 1], got {recorded_share!r}")
+    n_recorded = int(round(recorded_share * n))
+    if n_recorded and not recorded_clips:
+        raise ConfigError("training_pool: recorded_share > 0 needs recorded_clips, got none")
     from tqdm import tqdm
 
-    clips = load_clips("train") if clips is None else clips
     rng = np.random.default_rng(seed)
+    recorded_rng = np.random.default_rng([seed, 1])
+    if n_recorded < n:
+        clips = load_clips("train") if clips is None else clips
     scenes, starts = [], np.zeros((n, 3))
     for i in tqdm(range(n), desc="site training resets", unit="reset", disable=not progress):
-        scene, starts[i] = sample_training_scene(rng, clips, observation=observation, vehicle=vehicle)
+        if i < n - n_recorded:
+            scene, starts[i] = sample_training_scene(rng, clips, observation=observation, vehicle=vehicle)
+        else:
+            scene, starts[i] = sample_recorded_reset(recorded_rng, recorded_clips, vehicle=vehicle)
         scenes.append(scene)
     return scenes, starts
 
 
 def cached_training_pool(path: str | Path, n: int, seed: int, *, observation=SITE_OBSERVATION,
                          vehicle: VehicleSpec | None = None, clips: Sequence[Clip] | None = None,
-                         progress: bool = False) -> tuple[list[Scene], np.ndarray]:
+                         progress: bool = False, recorded_share: float = 0.0,
+                         recorded_clips: Sequence[Clip] = ()) -> tuple[list[Scene], np.ndarray]:
     """`training_pool`, kept in the pickle file ``path`` (a training run's folder): a file drawn with the same
-    ``n``, ``seed``, observation and vehicle is read back (a resumed run trains on exactly the pool it started
-    with, without the ~5 min of drawing it again); a missing, unreadable or differently drawn file is redrawn and
-    rewritten. ``clips`` given explicitly are not part of the key: pass them only with a fresh path."""
+    ``n``, ``seed``, observation, vehicle and recorded resets (share and clip names) is read back (a resumed run
+    trains on exactly the pool it started with, without the ~5 min of drawing it again); a missing, unreadable or
+    differently drawn file is redrawn and rewritten. ``clips`` given explicitly are not part of the key: pass them
+    only with a fresh path."""
     path = Path(path)
     key = {"format": 1, "n": n, "seed": seed, "observation": asdict(observation),
            "vehicle": asdict(vehicle or VehicleSpec())}
+    if recorded_share:
+        key["recorded"] = {"share": recorded_share, "clips": [c.name for c in recorded_clips]}
     if path.exists():
         try:
             with path.open("rb") as f:
@@ -1218,7 +1281,8 @@ def cached_training_pool(path: str | Path, n: int, seed: int, *, observation=SIT
                 return payload["scenes"], payload["starts"]
         except (OSError, EOFError, pickle.UnpicklingError, AttributeError, TypeError):
             pass  # unreadable: drawn again below
-    scenes, starts = training_pool(n, seed, observation=observation, vehicle=vehicle, clips=clips, progress=progress)
+    scenes, starts = training_pool(n, seed, observation=observation, vehicle=vehicle, clips=clips, progress=progress,
+                                   recorded_share=recorded_share, recorded_clips=recorded_clips)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp")
     with tmp.open("wb") as f:

@@ -47,7 +47,6 @@ from shapely.ops import unary_union
 
 from np_sim.benchmarks.common import (
     ClutterSpec,
-    DraftRejected,
     box,
     jsonable,
     choose_start_region,

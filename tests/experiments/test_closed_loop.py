@@ -97,3 +97,21 @@ def test_footprint_samples_and_connector_reach_the_planner_and_the_config(tmp_pa
     with pytest.raises(ValueError, match="--footprint-samples: expected >= 0"):
         main(["--clips", "--clips-limit", "1", "--planners", "neuralparker_footprint", "--footprint-samples", "-1",
               "--out", str(tmp_path / "bad")])
+
+
+def test_the_difficult_training_clips_run_by_split(tmp_path, monkeypatch):
+    import np_sim.clips as clips_module
+
+    clips, _ = clips_module.generate_split("train", 12)  # the first twelve training clips: two are difficult
+    monkeypatch.setattr(clips_module, "difficult_clips",
+                        lambda split: [c for c in clips if c.difficulty.difficult] if split == "train" else None)
+    out = tmp_path / "run"
+    result = main(["--clips", "--split", "train-difficult", "--clips-limit", "1", "--planners", "hybrid_astar",
+                   "--no-render", "--out", str(out)])
+    config = json.loads((out / "config.json").read_text())
+    assert config["split"] == "train-difficult" and config["clips"] == ["train-0000009"]
+    assert [r["clip"] for r in result["records"]] == ["train-0000009"]
+    assert "Closed loop on 1 difficult training site clips" in result["table"]
+    with pytest.raises(ValueError, match=r"\['eval-1000016'\] are not train-difficult clips \(train-0000009 …"):
+        main(["--clips", "--split", "train-difficult", "--clip-names", KNOWN_FEASIBLE, "--planners", "hybrid_astar",
+              "--no-render", "--out", str(tmp_path / "bad")])

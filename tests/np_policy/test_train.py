@@ -6,7 +6,7 @@ import pytest
 import torch
 
 from np_policy.checkpoint import CheckpointError, load_checkpoint
-from np_policy.train import TrainConfig, Trainer, main, train
+from np_policy.train import TrainConfig, Trainer, benchmark_defaults, main, train
 from np_sim.errors import ConfigError
 
 TINY = {"benchmark": "examples", "seed": 3, "curriculum_pool": 32,
@@ -78,7 +78,7 @@ def test_benchmark_must_name_a_benchmark_or_scene_files(tmp_path):
 
 
 def test_site_defaults_are_the_papers_real_vehicle_configuration():
-    from np_policy.train import benchmark_defaults, merge_config
+    from np_policy.train import merge_config
     from np_sim.errors import ConfigError
     from np_sim.site import SITE_OBSERVATION
 
@@ -145,3 +145,25 @@ def test_the_site_pool_is_kept_in_the_run_folder_and_redrawn_when_its_settings_d
     path.write_bytes(b"not a pickle")
     cached_training_pool(path, 3, seed=5)  # unreadable: drawn again
     assert len(drawn) == 2
+    cached_training_pool(path, 3, seed=5, recorded_share=0.5, recorded_clips=clips)  # recorded resets: drawn again
+    assert len(drawn) == 3 and drawn[-1] == (3, 5)
+
+
+def test_recorded_resets_are_a_site_option_drawn_from_the_difficult_training_clips(monkeypatch):
+    import np_policy.train as train_module
+    from np_sim.clips import load_clips
+
+    site = benchmark_defaults("site")
+    config = TrainConfig.from_dict(site | {"site_recorded_share": 0.5, "site_recorded_skip": 2})
+    assert config.site_recorded_share == 0.5 and TrainConfig.from_dict(site).site_recorded_share == 0.0
+    with pytest.raises(ConfigError, match="recorded resets exist on the site only, got benchmark 'factorial'"):
+        TrainConfig(site_recorded_share=0.5)
+    with pytest.raises(ConfigError, match=r"site_recorded_share: expected a share in \[0, 1\], got -0.1"):
+        TrainConfig.from_dict(site | {"site_recorded_share": -0.1})
+    with pytest.raises(ConfigError, match="site_recorded_skip: expected >= 0 clips, got -1"):
+        TrainConfig.from_dict(site | {"site_recorded_skip": -1})
+    clips = load_clips("eval")[:5]  # all difficult, standing in for the training split
+    monkeypatch.setattr(train_module, "difficult_clips", lambda split: clips)
+    assert [c.name for c in train_module.recorded_clips(2)] == [c.name for c in clips[2:]]
+    with pytest.raises(ConfigError, match="5 leaves none of the 5 difficult training clips"):
+        train_module.recorded_clips(5)

@@ -23,7 +23,9 @@ from np_sim.clips import (
     generate_split,
     load_clips,
     polygon_distances,
+    sample_recorded_reset,
     sample_training_scene,
+    training_pool,
     split_of_seed,
 )
 from np_sim.collision import path_valid
@@ -236,6 +238,47 @@ def test_training_reset_sampler(train_clips):
     a = sample_training_scene(np.random.default_rng(3), train_clips)
     b = sample_training_scene(np.random.default_rng(3), train_clips)
     assert a[0].to_dict() == b[0].to_dict() and np.array_equal(a[1], b[1])
+
+
+def test_recorded_resets_replay_the_clips_own_task_as_the_closed_loop_sees_it(eval_clips):
+    clips = eval_clips[:4]
+    by_name = {c.name: c for c in clips}
+    exact = [sample_recorded_reset(np.random.default_rng(seed), clips, exact_share=1.0) for seed in range(6)]
+    for scene, start in exact:
+        clip_name, frame, kind = scene.name.split("/")
+        clip = by_name[clip_name]
+        assert kind == "recorded" and np.array_equal(start, clip.start) and np.array_equal(scene.target, clip.target)
+        planned = clip.frame_scene(int(frame[1:]), pose=start)  # the scene the closed loop plans in from there
+        assert [o.vertices.tolist() for o in scene.obstacles] == [o.vertices.tolist() for o in planned.obstacles]
+    moved = [sample_recorded_reset(np.random.default_rng(seed), clips, exact_share=0.0) for seed in range(12)]
+    offsets = []
+    for scene, start in moved:
+        clip = by_name[scene.name.split("/")[0]]
+        offsets.append(np.hypot(*(start[:2] - clip.start[:2])))
+        footprint = ShapelyPolygon(VEHICLE.footprint(start))
+        assert ShapelyPolygon(clip.site.boundary).contains(footprint)
+        assert not any(footprint.intersects(ShapelyPolygon(o.vertices)) for o in scene.obstacles)
+        assert path_valid(scene, start[None, :], convention="footprint")
+    assert 0.0 < np.median(offsets) < 1.5  # sd 0.5 m per axis: median radius ≈ 0.59 m
+    a = sample_recorded_reset(np.random.default_rng(3), clips)
+    b = sample_recorded_reset(np.random.default_rng(3), clips)
+    assert a[0].to_dict() == b[0].to_dict() and np.array_equal(a[1], b[1])
+    with pytest.raises(ConfigError, match="expected at least one clip"):
+        sample_recorded_reset(np.random.default_rng(0), [])
+
+
+def test_a_pool_with_recorded_resets_keeps_its_app_c_part(eval_clips):
+    clips = eval_clips[:3]
+    plain_scenes, plain_starts = training_pool(4, seed=5, clips=clips)
+    scenes, starts = training_pool(4, seed=5, clips=clips, recorded_share=0.5, recorded_clips=eval_clips[3:6])
+    assert [s.to_dict() for s in scenes[:2]] == [s.to_dict() for s in plain_scenes[:2]]
+    assert np.array_equal(starts[:2], plain_starts[:2])
+    assert [s.name.endswith("/reset") for s in scenes] == [True, True, False, False]
+    assert {s.name.split("/")[0] for s in scenes[2:]} <= {c.name for c in eval_clips[3:6]}
+    with pytest.raises(ConfigError, match="needs recorded_clips"):
+        training_pool(4, seed=5, clips=clips, recorded_share=0.5)
+    with pytest.raises(ConfigError, match=r"recorded_share must be in \[0, 1\], got 1.5"):
+        training_pool(4, seed=5, clips=clips, recorded_share=1.5, recorded_clips=clips)
 
 
 def test_cli_summary_and_figure(tmp_path, capsys):
