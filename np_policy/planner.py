@@ -7,7 +7,9 @@ checks, the heading gate and the Hermite selection follow exactly the env's rule
 
 ``samples=N`` (beyond the paper, ``np_policy.sampling``) adds N seeded stochastic rollouts of the same policy to
 the mean rollout and returns the successful one the tracker can steer with the lowest drive-time, reversal,
-clearance and terminal-heading cost; ``samples=0`` (the default) is the paper's planner.
+clearance and terminal-heading cost; ``samples=0`` (the default) is the paper's planner. ``rescue`` adds wider
+rounds that run only when none of those succeeds: each ``(n, scale)`` samples ``n`` rollouts with the policy's
+standard deviation times ``scale``, in order, until one round has a successful plan.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import time
 import weakref
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -33,15 +36,20 @@ class NeuralParkerPlanner:
     """A trained policy as a planner."""
 
     def __init__(self, model: ActorCritic, config: TrainConfig, samples: int = 0,
-                 weights: ChoiceWeights | None = None, seed: int = 0):
+                 weights: ChoiceWeights | None = None, seed: int = 0, rescue: Sequence[tuple[int, float]] = ()):
         if int(samples) < 0:
             raise ValueError(f"NeuralParkerPlanner: samples must be >= 0, got {samples!r}")
+        for n, scale in rescue:
+            if int(n) < 1 or not scale > 0:
+                raise ValueError(f"NeuralParkerPlanner: rescue rounds must be (n >= 1, scale > 0), got {(n, scale)!r}")
         self.model = model.eval()
         self.actor = CompiledActor(self.model)
         self.config = config
         self.weights = ChoiceWeights() if weights is None else weights
         std = self.model.log_std.detach().exp().numpy()
         self.sampled = SampledRollouts(self.actor, std, config.env, samples, seed) if samples else None
+        self.rescue = [SampledRollouts(self.actor, std * scale, config.env, n, seed + 1 + k)
+                       for k, (n, scale) in enumerate(rescue)]
         self._envs: weakref.WeakKeyDictionary[Scene, ParkingEnv] = weakref.WeakKeyDictionary()
 
     def _env(self, scene: Scene) -> ParkingEnv:
@@ -54,13 +62,14 @@ class NeuralParkerPlanner:
 
     @classmethod
     def from_checkpoint(cls, path: str | Path, connector: str | None = None, samples: int = 0,
-                        weights: ChoiceWeights | None = None, seed: int = 0) -> "NeuralParkerPlanner":
+                        weights: ChoiceWeights | None = None, seed: int = 0,
+                        rescue: Sequence[tuple[int, float]] = ()) -> "NeuralParkerPlanner":
         """Rebuild the network and env config stored in a checkpoint (CheckpointError on a bad file).
 
         ``connector`` ('fixed', 'ensemble' or 'centred', `np_sim.config.ConnectorConfig.variant`) replaces the
         checkpoint's terminal connector (paper §III-E: the 81-candidate ensemble used at evaluation only); None
-        keeps it. ``samples``, ``weights``, ``seed``: best-of-N sampled rollouts (module docstring; 0 = the paper's
-        planner)."""
+        keeps it. ``samples``, ``weights``, ``seed``, ``rescue``: best-of-N sampled rollouts and the wider rounds
+        after a failure (module docstring; 0 and () = the paper's planner)."""
         payload = load_checkpoint(path)
         config = TrainConfig.from_dict(payload["config"])
         if connector is not None:
@@ -69,7 +78,7 @@ class NeuralParkerPlanner:
             config = dataclasses.replace(config, env=env)
         model = ActorCritic(config.env.observation, config.network)
         model.load_state_dict(payload["model"])
-        return cls(model, config, samples=samples, weights=weights, seed=seed)
+        return cls(model, config, samples=samples, weights=weights, seed=seed, rescue=rescue)
 
     def plan(self, scene: Scene, start) -> Plan:
         """Roll out the mean action from ``start`` until success, collision or the arc budget (paper §III-A); with
@@ -78,6 +87,10 @@ class NeuralParkerPlanner:
         plan = self._mean_rollout(scene, start)
         if self.sampled is not None:
             plan = choose([plan, *self.sampled(scene, start)], scene, self.config.env.vehicle, self.weights)
+        for rounds in self.rescue:
+            if plan.success:
+                break
+            plan = choose([plan, *rounds(scene, start)], scene, self.config.env.vehicle, self.weights)
         return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0)
 
     def _mean_rollout(self, scene: Scene, start) -> Plan:

@@ -83,11 +83,19 @@ def test_two_workers_give_the_records_of_one(tmp_path, site_checkpoint):
 def test_footprint_samples_and_connector_reach_the_planner_and_the_config(tmp_path):
     out = tmp_path / "run"
     main(["--clips", "--clip-names", KNOWN_FEASIBLE, "--planners", "neuralparker_footprint", "--no-render",
-          "--footprint-samples", "4", "--out", str(out)])
+          "--footprint-samples", "4", "--footprint-rescue", "8:2", "--out", str(out)])
     config = json.loads((out / "config.json").read_text())
     assert config["footprint_samples"] == 4 and config["footprint_connector"] == "centred"
+    assert config["footprint_rescue"] == [[8, 2.0]]
     table = (out / "table.md").read_text()
     assert "best of its mean rollout and 4 sampled rollouts" in table and "terminal connector: centred" in table
+    assert "When none of them succeeds it samples 8 at 2 σ (--footprint-rescue)." in table
+    default = build_planners(["neuralparker_footprint"], PlannerSettings())["neuralparker_footprint"]
+    assert [r.n for r in default.rescue] == [128, 128]
+    for rounds, scale in zip(default.rescue, (2.0, 3.0)):
+        assert rounds.std == pytest.approx(scale * default.sampled.std)
+    with pytest.raises(SystemExit):
+        main(["--clips", "--footprint-rescue", "8", "--out", str(tmp_path / "bad")])
     settings = PlannerSettings(footprint_connector="fixed", footprint_samples=0)
     planner = build_planners(["neuralparker_footprint"], settings)["neuralparker_footprint"]
     assert planner.config.env.connector.headings_deg == (80.0, 90.0, 100.0)  # the checkpoint's, the paper's order

@@ -40,6 +40,26 @@ def test_sampling_finds_a_plan_where_the_mean_rollout_fails_and_is_deterministic
     np.testing.assert_array_equal(first.hermite.points, second.hermite.points)
 
 
+def test_rescue_rounds_run_only_after_a_failure(problem, sampled):
+    """Rescue round k samples with seed + 1 + k: seed 2's first round of 16 at scale 1 is ``sampled``'s own set
+    (16, seed 3), so where the mean rollout fails the two planners return the same plan; where it succeeds the
+    rescue planner returns the mean rollout."""
+    scene, start = problem
+    rescue = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, seed=2, rescue=((16, 1.0), (8, 3.0)))
+    plan = rescue.plan(scene, start)
+    assert plan.success
+    np.testing.assert_array_equal(plan.arcs, sampled.plan(scene, start).arcs)
+    assert [(r.n, r.seed) for r in rescue.rescue] == [(16, 3), (8, 4)]
+    np.testing.assert_allclose(rescue.rescue[1].std, 3.0 * rescue.rescue[0].std)
+    clip = next(c for c in load_clips("eval") if c.name == "eval-1000009")  # the mean rollout parks here
+    easy_scene, easy_start = clip.frame_scene(0, pose=clip.start), np.asarray(clip.start, float)
+    mean = NeuralParkerPlanner.from_checkpoint(CHECKPOINT).plan(easy_scene, easy_start)
+    assert mean.success
+    np.testing.assert_array_equal(rescue.plan(easy_scene, easy_start).arcs, mean.arcs)
+    with pytest.raises(ValueError, match=r"rescue rounds must be \(n >= 1, scale > 0\), got \(16, 0.0\)"):
+        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, rescue=((16, 0.0),))
+
+
 def test_sampled_rollouts_replay_in_the_arc_kinematics(problem, sampled):
     """Each recorded arc is the one the env executed: replaying them from the start reaches the pose the Hermite
     segment starts from (or, without one, a pose within the env's terminal tolerance of the target)."""
