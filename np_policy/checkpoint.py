@@ -70,8 +70,14 @@ def load_checkpoint(path: str | Path, expected_config: dict[str, Any] | None = N
         if key not in payload:
             raise CheckpointError(f"{path}: checkpoint lacks the {key!r} entry")
     if expected_config is not None:
-        diffs = [d for d in config_differences(expected_config, payload["config"])
-                 if not any(d.startswith(prefix) for prefix in ignore)]
-        if diffs:
-            raise CheckpointError(f"{path}: checkpoint config differs from the expected one:\n  " + "\n  ".join(diffs))
+        check_config(path, expected_config, payload["config"], ignore)
     return payload
+
+
+def check_config(path: str | Path, expected: dict[str, Any], stored: dict[str, Any],
+                 ignore: tuple[str, ...] = ()) -> None:
+    """CheckpointError naming ``path`` and every field where the checkpoint's ``stored`` config differs from
+    ``expected``, except paths starting with one of ``ignore``."""
+    diffs = [d for d in config_differences(expected, stored) if not any(d.startswith(prefix) for prefix in ignore)]
+    if diffs:
+        raise CheckpointError(f"{path}: checkpoint config differs from the expected one:\n  " + "\n  ".join(diffs))

@@ -26,7 +26,7 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from np_policy.checkpoint import CheckpointError, config_differences, load_checkpoint, save_checkpoint
+from np_policy.checkpoint import CheckpointError, check_config, config_differences, load_checkpoint, save_checkpoint
 from np_policy.config import NetworkConfig, PPOConfig
 from np_policy.network import ActorCritic, clip_action
 from np_policy.ppo import RunningMeanStd, compute_targets, make_optimizer, ppo_update, set_learning_rate
@@ -381,7 +381,9 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
     rows: list[dict[str, Any]] = []
     if resume:
         snapshot = out / "snapshot.pt"
-        payload = load_checkpoint(snapshot, expected_config=config.to_dict())
+        payload = load_checkpoint(snapshot)
+        # a field added to TrainConfig after the run started is stored without it: compare with its default
+        check_config(snapshot, config.to_dict(), TrainConfig.from_dict(payload["config"]).to_dict())
         trainer.restore(payload)
         if metrics_path.exists():
             rows = [json.loads(line) for line in metrics_path.read_text().splitlines() if line.strip()]

@@ -35,6 +35,22 @@ def test_resume_gives_the_same_curve_as_an_uninterrupted_run(tmp_path):
     assert all(torch.equal(wa[k], wb[k]) for k in wa)
 
 
+def test_a_run_resumes_after_a_field_with_a_default_was_added_to_the_config(tmp_path):
+    config = TrainConfig.from_dict(TINY)
+    train(config, tmp_path / "run", epochs=2, progress=False)
+    snapshot = tmp_path / "run" / "snapshot.pt"
+    payload = load_checkpoint(snapshot)
+    for key in ("site_recorded_share", "site_recorded_skip"):  # as a snapshot written before these fields existed
+        del payload["config"][key]
+    torch.save(payload, snapshot)
+    rows = train(config, tmp_path / "run", resume=True, progress=False)
+    assert [r["epoch"] for r in rows] == [1, 2, 3, 4]
+    payload["config"]["seed"] = 4  # a real difference still stops the resume
+    torch.save(payload, snapshot)
+    with pytest.raises(CheckpointError, match="seed: checkpoint has 4, expected 3"):
+        train(config, tmp_path / "run", resume=True, progress=False)
+
+
 def test_cli_writes_metrics_curves_and_checkpoints(tmp_path):
     cfg = tmp_path / "tiny.json"
     cfg.write_text(json.dumps({k: v for k, v in TINY.items() if k not in ("benchmark", "seed")}))
