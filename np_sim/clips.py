@@ -1152,8 +1152,9 @@ def sample_training_scene(rng: np.random.Generator, clips: Sequence[Clip], *,
         clip = clips[int(rng.integers(len(clips)))]
         frame = clip.detection_frame(int(rng.integers(clip.n_frames)))
         _, polygons = clip.detections(frame)
-        shapes = shapely.polygons(polygons) if len(polygons) else np.array([], dtype=object)
+        shapes = _detection_shapes(polygons)
         site = clip.site
+        region, ring = ShapelyPolygon(site.boundary), LinearRing(site.boundary)
         target = None
         for index in rng.permutation(len(site.spots)):
             footprint = ShapelyPolygon(vehicle.footprint(site.spots[index].pose))
@@ -1167,8 +1168,8 @@ def sample_training_scene(rng: np.random.Generator, clips: Sequence[Clip], *,
         lo, hi = site.boundary.min(axis=0), site.boundary.max(axis=0)
         for _ in range(start_draws):
             start = np.array([*rng.uniform(lo, hi), rng.uniform(-math.pi, math.pi)])
-            if (not _start_fits(site, polygons, start, vehicle)
-                    or not ShapelyPolygon(vehicle.footprint(start)).disjoint(target_fp)
+            footprint = ShapelyPolygon(vehicle.footprint(start))
+            if (not _start_fits(footprint, region, ring, shapes) or not footprint.disjoint(target_fp)
                     or math.isinf(_geodesic_at(grid, start[:2]))):
                 continue
             order = np.lexsort((np.arange(len(polygons)), polygon_distances(start[:2], polygons)))
@@ -1182,14 +1183,16 @@ def sample_training_scene(rng: np.random.Generator, clips: Sequence[Clip], *,
     raise RuntimeError(f"sample_training_scene: no valid target and start in {max_tries} clip/frame draws")
 
 
-def _start_fits(site: Site, polygons: np.ndarray, start: np.ndarray, vehicle: VehicleSpec) -> bool:
-    """The start footprint lies strictly inside the site boundary and touches no detection."""
-    footprint = ShapelyPolygon(vehicle.footprint(start))
-    if not ShapelyPolygon(site.boundary).contains_properly(footprint):
-        return False
-    if footprint.distance(LinearRing(site.boundary)) <= 0.0:
-        return False
-    return not (len(polygons) and np.any(shapely.intersects(shapely.polygons(polygons), footprint)))
+def _detection_shapes(polygons: np.ndarray) -> np.ndarray:
+    """A frame's detection polygons as a shapely array (empty when the frame has none)."""
+    return shapely.polygons(polygons) if len(polygons) else np.array([], dtype=object)
+
+
+def _start_fits(footprint: ShapelyPolygon, region: ShapelyPolygon, ring: LinearRing, shapes: np.ndarray) -> bool:
+    """A start footprint lies strictly inside the site ``region`` (off its boundary ``ring``) and touches none of
+    the detection polygons ``shapes`` (built once per frame by the caller: they serve many start draws)."""
+    return (region.contains_properly(footprint) and footprint.distance(ring) > 0.0
+            and not np.any(shapely.intersects(shapes, footprint)))
 
 
 def sample_recorded_reset(rng: np.random.Generator, clips: Sequence[Clip], *, vehicle: VehicleSpec | None = None,
@@ -1215,7 +1218,10 @@ def sample_recorded_reset(rng: np.random.Generator, clips: Sequence[Clip], *, ve
             start[:2] += rng.normal(0.0, position_sd_m, 2)
             start[2] = wrap_angle(start[2] + math.radians(rng.normal(0.0, heading_sd_deg)))
         _, polygons = clip.detections(clip.detection_frame(frame))
-        if not _start_fits(clip.site, polygons, start, vehicle):
+        shapes = _detection_shapes(polygons)
+        boundary = clip.site.boundary
+        footprint = ShapelyPolygon(vehicle.footprint(start))
+        if not _start_fits(footprint, ShapelyPolygon(boundary), LinearRing(boundary), shapes):
             continue
         scene = clip.frame_scene(frame, pose=start, vehicle=vehicle)
         return replace(scene, name=f"{clip.name}/f{frame:03d}/recorded"), start
