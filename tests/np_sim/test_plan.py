@@ -53,3 +53,40 @@ def test_hermite_samples_end_at_the_target_with_the_right_steering_sign():
 def test_bad_spacing_is_an_error():
     with pytest.raises(ValueError, match="ds must be > 0"):
         Plan(start=np.zeros(3)).sample(0.0)
+
+
+def _dense_signed_curvature(g0, g1, d0, d1, n=200_001):
+    """Independent oracle: eq:hermite sampled very densely, curvature from finite differences."""
+    from np_sim.hermite import hermite_curve
+
+    pts = hermite_curve(g0, g1, d0, d1, n)
+    t = np.linspace(0.0, 1.0, n)
+    dx, dy = np.gradient(pts[:, 0], t), np.gradient(pts[:, 1], t)
+    ddx, ddy = np.gradient(dx, t), np.gradient(dy, t)
+    return pts, (dx * ddy - dy * ddx) / np.hypot(dx, dy) ** 3
+
+
+@pytest.mark.parametrize("forward", [True, False])
+def test_long_hermite_samples_carry_the_curves_own_curvature(forward):
+    # a 40 m connection: its 100 stored samples are 0.4 m apart, so interpolating between them linearly would
+    # put each interval's turn into a spike at its vertices; the samples must follow the cubic itself
+    from np_sim.hermite import hermite_curve
+
+    g0, g1, d0, d1 = [2.0, -38.0], [0.0, 0.0], [-8.0, 45.0], [0.0, 40.0]
+    seg = HermiteSegment(points=hermite_curve(g0, g1, d0, d1, 100), forward=forward, length=40.0, delta_kappa=0.0)
+    rows = Plan(start=np.array([*g0, 0.0]), hermite=seg, success=True).sample(0.05)[1:]
+    dense, kappa = _dense_signed_curvature(g0, g1, d0, d1)
+    nearest = np.argmin(np.hypot(dense[None, :, 0] - rows[::20, None, 0], dense[None, :, 1] - rows[::20, None, 1]),
+                        axis=1)
+    gear = 1.0 if forward else -1.0
+    np.testing.assert_allclose(rows[::20, 3], gear * kappa[nearest], atol=2e-4)
+    np.testing.assert_allclose(rows[-1, :2], g1, atol=1e-9)
+    assert np.max(np.abs(np.diff(rows[:, 3]))) < 1e-3  # smooth: no spikes at the stored samples
+    assert np.all(np.diff(rows[:, 5]) <= 0.05 + 1e-9)
+
+
+def test_hermite_points_that_are_not_one_cubic_are_an_error():
+    pts = np.column_stack([np.linspace(0, 10, 20), np.abs(np.linspace(-5, 5, 20))])  # a V, not a cubic
+    seg = HermiteSegment(points=pts, forward=True, length=14.0, delta_kappa=0.0)
+    with pytest.raises(ValueError, match="not samples of one cubic"):
+        Plan(start=np.array([0.0, 5.0, 0.0]), hermite=seg, success=True).sample(0.1)
