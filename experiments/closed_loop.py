@@ -213,12 +213,13 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
         render_clips: int = 3, render: bool = True, out: Path | None = None, workers: int = 1,
         controller: str = "lqr", rrd: bool = True, progress: bool = True,
         clip_names: list[str] | None = None, replan: str = "on_invalid", track_window: int = 1,
-        split: str = "eval") -> dict[str, Any]:
+        split: str = "eval", stitch: bool = False) -> dict[str, Any]:
     """Run the clips × planners; returns records, table text, folder and notes (see the module docstring).
     ``split`` picks the clip set (``CLIP_SPLITS``; the held-out clips by default).
     ``planners=None`` runs all of them, leaving out the footprint-aware NeuralParker (with a note) when
     ``settings.footprint_checkpoint`` is missing; a planner named explicitly must have its checkpoint.
-    ``track_window`` is the perception filter (off by default, as on the paper's vehicle)."""
+    ``track_window`` is the perception filter (off by default, as on the paper's vehicle); ``stitch`` starts the
+    replans of a moving vehicle from the pose ahead on its plan where it can still stop (`tracking.stitching`)."""
     from tracking.clip_run import ClipRunConfig
 
     from tracking.controllers import CONTROLLERS
@@ -234,7 +235,10 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
     if planners is None and not footprint.exists():
         names.remove("neuralparker_footprint")
         notes.append(f"NeuralParker (footprint): {footprint} is missing, row left out.")
-    clip_config = ClipRunConfig(replan=replan, track_window=track_window)
+    clip_config = ClipRunConfig(replan=replan, track_window=track_window, stitch=stitch)
+    if stitch:
+        notes.append("Stitched replanning (--stitch): a moving vehicle's replan starts from the pose ahead on its "
+                     "followed plan where it can still stop, and it drives that plan up to there.")
     if "neuralparker_footprint" in names and settings.footprint_samples:
         notes.append(f"NeuralParker (footprint) plays the best of its mean rollout and {settings.footprint_samples} "
                      f"sampled rollouts (np_policy.sampling; --footprint-samples 0 = the paper's planner).")
@@ -438,6 +442,10 @@ def main(argv=None) -> dict[str, Any]:
                         help="filter each object's detections over this many frames before planning (mean shape "
                              "at the latest centroid, dropouts held; default 1 = raw frames, as on the paper's "
                              "vehicle)")
+    parser.add_argument("--stitch", action="store_true",
+                        help="a replan of a moving vehicle starts from the pose ahead on its followed plan where it "
+                             "can still stop (braking distance + one frame + 0.2 m), and the vehicle drives the "
+                             "followed plan up to there (trajectory stitching; default: from the simulated pose)")
     parser.add_argument("--search-margin", type=float, default=0.0, metavar="M",
                         help="Hybrid A* and NP-Guided A*'s search plan for the footprint grown by M metres on every "
                              "side (default 0)")
@@ -467,7 +475,7 @@ def main(argv=None) -> dict[str, Any]:
                                footprint_rescue=tuple(args.footprint_rescue))
     result = run(args.planners, settings, args.clips_limit, args.render_clips, not args.no_render, args.out,
                  args.workers, args.controller, clip_names=args.clip_names, replan=args.replan,
-                 track_window=args.track_window, split=args.split)
+                 track_window=args.track_window, split=args.split, stitch=args.stitch)
     folder = result["folder"]
     print(result["table"])
     print(f"\nwall time {result['wall_time_s']:.0f} s; results in {folder}/: records.csv, records.json, table.md, "

@@ -55,6 +55,7 @@ from tracking.movers import Mover, poses_at
 from tracking.record import Contact
 from tracking.observer import Observers, RunObserver, TrajectoryRecorder
 from tracking.record import ExecutionRecord
+from tracking.stitching import StitchedPlan, stitch_distance
 from tracking.validators import validate_plan
 from tracking.world import build_world
 
@@ -88,6 +89,12 @@ class ClipRunConfig:
     track_window: int = 1
     """Frames the planner's detections are filtered over (`Clip.tracked_detections`); 1 = each frame's raw
     detections, as the paper's vehicle used them."""
+    stitch: bool = False
+    """``on_invalid``: a replan of a moving vehicle that is on its followed plan starts from the pose of that plan
+    it can still stop at (`tracking.stitching`) and the vehicle drives the followed plan up to there, when that
+    stretch is still free in the frame's scene; False = every replan starts from the simulated pose."""
+    stitch_margin_m: float = 0.2
+    """Distance added to the braking distance and one replanning period of driving to place the stitch (m)."""
 
     def __post_init__(self) -> None:
         if self.replan not in REPLAN_MODES:
@@ -97,9 +104,9 @@ class ClipRunConfig:
                              f"({self.tracker.executor.max_time_s}), got {self.first_plan_wait_s!r}")
         if self.track_window < 1:
             raise ValueError(f"ClipRunConfig.track_window: expected >= 1 frame, got {self.track_window!r}")
-        if not (self.deviation_m > 0 and self.check_ds_m > 0):
-            raise ValueError(f"ClipRunConfig: deviation_m and check_ds_m must be > 0, got {self.deviation_m!r}, "
-                             f"{self.check_ds_m!r}")
+        if not (self.deviation_m > 0 and self.check_ds_m > 0 and self.stitch_margin_m >= 0):
+            raise ValueError(f"ClipRunConfig: deviation_m and check_ds_m must be > 0 and stitch_margin_m >= 0, got "
+                             f"{self.deviation_m!r}, {self.check_ds_m!r}, {self.stitch_margin_m!r}")
 
 
 class _FollowedPath:
@@ -109,7 +116,9 @@ class _FollowedPath:
     """Samples searched ahead of the last progress index (4 m at 0.1 m: far more than 0.1 s of driving)."""
 
     def __init__(self, plan: Plan, ds_m: float):
-        self.poses = plan.sample(ds_m)[:, :3]
+        self.plan = plan
+        self.rows = plan.sample(ds_m)
+        self.poses = self.rows[:, :3]
         self.index = 0
 
     def advance(self, pose: np.ndarray) -> float:
@@ -293,7 +302,9 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
     followed: list[_FollowedPath] = []
     wait_until = [0.0]
 
-    def plan_at(pose: np.ndarray, t: float, frame: int, scene: Scene) -> Plan:
+    def plan_at(pose: np.ndarray, t: float, frame: int, scene: Scene, prefix: tuple | None = None) -> Plan:
+        """Call the planner from ``pose``; with ``prefix`` = (followed path, s_from, s_to) the usable plan is
+        followed after that stretch of the followed plan (a `StitchedPlan`)."""
         try:
             plan = planner.plan(scene, pose)
         except ConfigError as error:  # NeuralParker refuses a start in collision under its convention
@@ -306,14 +317,31 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
         if log is not None:
             log.log_detections(t, scene)
         if calls[-1].usable:
+            if prefix is not None:
+                plan = StitchedPlan.join(prefix[0].plan, prefix[1], prefix[2], plan)
             followed[:] = [_FollowedPath(plan, config.check_ds_m)]
         return plan
+
+    def stitched(path: _FollowedPath, speed_mps: float, t: float, frame: int, scene: Scene) -> Plan | None:
+        """A replan from the followed plan's pose the vehicle can still stop at, or None when that pose is past
+        the plan's end or the stretch up to it is no longer free in ``scene``."""
+        s_now = float(path.rows[path.index, 5])
+        ahead = stitch_distance(speed_mps, tracker.profile.accel_mps2, tracker.executor.replan_period_s,
+                                config.stitch_margin_m)
+        k = int(np.searchsorted(path.rows[:, 5], s_now + ahead))
+        if k >= len(path.rows) - 1 or not path_valid(scene, path.poses[path.index:k + 1], convention,
+                                                      tracker.vehicle):
+            return None
+        pose = path.poses[k].copy()
+        return plan_at(pose, t, frame, clip.frame_scene(frame, pose=pose, track_window=config.track_window),
+                       prefix=(path, s_now, float(path.rows[k, 5])))
 
     previous_pose = [np.asarray(clip.start, float)]
     rest_step_m = tracker.executor.rest_speed_mps * tracker.executor.replan_period_s
 
     def replan(pose: np.ndarray, t: float) -> Plan | None:
-        standing = math.hypot(pose[0] - previous_pose[0][0], pose[1] - previous_pose[0][1]) < rest_step_m
+        moved = math.hypot(pose[0] - previous_pose[0][0], pose[1] - previous_pose[0][1])
+        standing = moved < rest_step_m
         previous_pose[0] = np.array(pose, float)
         if parked(pose, clip.target, tracker.executor):
             return None  # a parked vehicle starts no new manoeuvre
@@ -327,6 +355,10 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
             if (off <= config.deviation_m and not (standing and path.at_end)
                     and path_valid(scene, path.remaining(), convention, tracker.vehicle)):
                 return None  # the followed plan still holds (standing at its end short of the target: it does not)
+            if config.stitch and not standing and off <= config.deviation_m:
+                plan = stitched(path, moved / tracker.executor.replan_period_s, t, frame, scene)
+                if plan is not None:
+                    return plan
         return plan_at(pose, t, frame, scene)
 
     start = np.asarray(clip.start, float)

@@ -123,3 +123,13 @@ def test_the_difficult_training_clips_run_by_split(tmp_path, monkeypatch):
     with pytest.raises(ValueError, match=r"\['eval-1000016'\] are not train-difficult clips \(train-0000009 …"):
         main(["--clips", "--split", "train-difficult", "--clip-names", KNOWN_FEASIBLE, "--planners", "hybrid_astar",
               "--no-render", "--out", str(tmp_path / "bad")])
+
+
+def test_stitch_flag_reaches_the_clip_runs_config_and_table(tmp_path):
+    out = tmp_path / "run"
+    result = main(["--clips", "--clip-names", "eval-1000009", "--planners", "hybrid_astar", "--no-render", "--stitch",
+                   "--out", str(out)])
+    config = json.loads((out / "config.json").read_text())
+    assert config["clip_run"]["stitch"] is True and config["clip_run"]["stitch_margin_m"] == 0.2
+    assert "Stitched replanning (--stitch)" in result["table"]
+    assert result["records"][0]["footprint_success"]

@@ -66,3 +66,35 @@ def test_a_plan_the_tracker_refuses_counts_as_a_failed_call_and_is_retried():
     assert not any(c.rejected for c in run.calls[3:])
     assert run.footprint_success, run.record.detail
     assert np.allclose(run.trajectory[run.trajectory[:, 0] < 1.0, 1:], clip.start)  # waited, not driven sharp
+
+
+class Recording(FailingFirst):
+    """Hybrid A* (footprint) that keeps every start it was asked to plan from and every plan it returned."""
+
+    def __init__(self):
+        super().__init__(0)
+        self.starts, self.plans = [], []
+
+    def plan(self, scene, start):
+        self.starts.append(np.array(start, float))
+        self.plans.append(self.search.plan(scene, start))
+        return self.plans[-1]
+
+
+def test_stitched_replans_start_ahead_on_the_followed_plan():
+    clip = next(c for c in load_clips("eval") if c.name == "eval-1000009")
+    planner = Recording()
+    run = run_clip(clip, planner, config=ClipRunConfig(stitch=True))
+    assert run.footprint_success, run.record.detail
+    t, poses = run.trajectory[:, 0], run.trajectory[:, 1:]
+    stitched = 0
+    for k in range(1, len(run.calls)):
+        vehicle = poses[np.argmin(np.abs(t - run.calls[k].time_s))]
+        start = planner.starts[k]
+        if np.hypot(*(start[:2] - vehicle[:2])) < 1e-9:
+            continue  # planned from the simulated pose (standing, or off its plan)
+        stitched += 1
+        earlier = np.vstack([p.sample(0.01)[:, :2] for p in planner.plans[:k] if p.success])
+        assert np.min(np.hypot(*(earlier - start[:2]).T)) < 0.01  # a pose of the plan it was following
+        assert np.hypot(*(start[:2] - vehicle[:2])) >= ClipRunConfig().stitch_margin_m - 0.05  # ahead of it
+    assert stitched >= 1
