@@ -98,6 +98,8 @@ class PlannerSettings:
     footprint_rescue: tuple[tuple[int, float], ...] = FOOTPRINT_RESCUE
     """NeuralParker (footprint)'s wider rounds when no rollout succeeds: (rollouts, standard-deviation scale) each,
     in order (`np_policy.planner.NeuralParkerPlanner`); () = none."""
+    footprint_margin_m: float = 0.0
+    """NeuralParker (footprint)'s rollouts are checked with the footprint grown by this on every side (m)."""
 
 
 def build_planners(names: list[str], settings: PlannerSettings) -> dict[str, Any]:
@@ -142,7 +144,7 @@ def build_planners(names: list[str], settings: PlannerSettings) -> dict[str, Any
 
             planners[name] = NeuralParkerPlanner.from_checkpoint(
                 settings.footprint_checkpoint, settings.footprint_connector, samples=settings.footprint_samples,
-                rescue=settings.footprint_rescue)
+                rescue=settings.footprint_rescue, margin_m=settings.footprint_margin_m)
     return planners
 
 
@@ -294,6 +296,7 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
         "controller": controller,
         "render_clips": render_clips if render else 0, "workers": workers, "wall_time_s": wall,
         "search_margin_m": settings.search_margin_m, "connector": settings.connector,
+        "footprint_margin_m": settings.footprint_margin_m if "neuralparker_footprint" in names else None,
         "footprint_connector": settings.footprint_connector if "neuralparker_footprint" in names else None,
         "clip_run": _clip_run_config(clip_config),
         "git_commit": git_commit()},
@@ -446,6 +449,9 @@ def main(argv=None) -> dict[str, Any]:
                         help="a replan of a moving vehicle starts from the pose ahead on its followed plan where it "
                              "can still stop (braking distance + one frame + 0.2 m), and the vehicle drives the "
                              "followed plan up to there (trajectory stitching; default: from the simulated pose)")
+    parser.add_argument("--footprint-margin", type=float, default=0.0, metavar="M",
+                        help="NeuralParker (footprint)'s rollouts are checked with the footprint grown by M metres "
+                             "on every side (default 0)")
     parser.add_argument("--search-margin", type=float, default=0.0, metavar="M",
                         help="Hybrid A* and NP-Guided A*'s search plan for the footprint grown by M metres on every "
                              "side (default 0)")
@@ -472,7 +478,8 @@ def main(argv=None) -> dict[str, Any]:
     settings = PlannerSettings(checkpoint=args.checkpoint, footprint_checkpoint=args.footprint_checkpoint,
                                search_margin_m=args.search_margin, connector=args.connector,
                                footprint_connector=args.footprint_connector, footprint_samples=args.footprint_samples,
-                               footprint_rescue=tuple(args.footprint_rescue))
+                               footprint_rescue=tuple(args.footprint_rescue),
+                               footprint_margin_m=args.footprint_margin)
     result = run(args.planners, settings, args.clips_limit, args.render_clips, not args.no_render, args.out,
                  args.workers, args.controller, clip_names=args.clip_names, replan=args.replan,
                  track_window=args.track_window, split=args.split, stitch=args.stitch)

@@ -36,7 +36,8 @@ class NeuralParkerPlanner:
     """A trained policy as a planner."""
 
     def __init__(self, model: ActorCritic, config: TrainConfig, samples: int = 0,
-                 weights: ChoiceWeights | None = None, seed: int = 0, rescue: Sequence[tuple[int, float]] = ()):
+                 weights: ChoiceWeights | None = None, seed: int = 0, rescue: Sequence[tuple[int, float]] = (),
+                 margin_m: float = 0.0):
         if int(samples) < 0:
             raise ValueError(f"NeuralParkerPlanner: samples must be >= 0, got {samples!r}")
         for n, scale in rescue:
@@ -44,6 +45,10 @@ class NeuralParkerPlanner:
                 raise ValueError(f"NeuralParkerPlanner: rescue rounds must be (n >= 1, scale > 0), got {(n, scale)!r}")
         self.model = model.eval()
         self.actor = CompiledActor(self.model)
+        self.body = config.env.vehicle
+        if margin_m:  # the rollouts' collision checks use the grown footprint; costs still see the real body
+            config = dataclasses.replace(config, env=dataclasses.replace(config.env,
+                                                                         vehicle=self.body.inflated(margin_m)))
         self.config = config
         self.weights = ChoiceWeights() if weights is None else weights
         std = self.model.log_std.detach().exp().numpy()
@@ -63,7 +68,7 @@ class NeuralParkerPlanner:
     @classmethod
     def from_checkpoint(cls, path: str | Path, connector: str | None = None, samples: int = 0,
                         weights: ChoiceWeights | None = None, seed: int = 0,
-                        rescue: Sequence[tuple[int, float]] = ()) -> "NeuralParkerPlanner":
+                        rescue: Sequence[tuple[int, float]] = (), margin_m: float = 0.0) -> "NeuralParkerPlanner":
         """Rebuild the network and env config stored in a checkpoint (CheckpointError on a bad file).
 
         ``connector`` ('fixed', 'ensemble' or 'centred', `np_sim.config.ConnectorConfig.variant`) replaces the
@@ -78,7 +83,7 @@ class NeuralParkerPlanner:
             config = dataclasses.replace(config, env=env)
         model = ActorCritic(config.env.observation, config.network)
         model.load_state_dict(payload["model"])
-        return cls(model, config, samples=samples, weights=weights, seed=seed, rescue=rescue)
+        return cls(model, config, samples=samples, weights=weights, seed=seed, rescue=rescue, margin_m=margin_m)
 
     def plan(self, scene: Scene, start) -> Plan:
         """Roll out the mean action from ``start`` until success, collision or the arc budget (paper §III-A); with
@@ -86,11 +91,11 @@ class NeuralParkerPlanner:
         t0 = time.perf_counter()
         plan = self._mean_rollout(scene, start)
         if self.sampled is not None:
-            plan = choose([plan, *self.sampled(scene, start)], scene, self.config.env.vehicle, self.weights)
+            plan = choose([plan, *self.sampled(scene, start)], scene, self.body, self.weights)
         for rounds in self.rescue:
             if plan.success:
                 break
-            plan = choose([plan, *rounds(scene, start)], scene, self.config.env.vehicle, self.weights)
+            plan = choose([plan, *rounds(scene, start)], scene, self.body, self.weights)
         return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0)
 
     def _mean_rollout(self, scene: Scene, start) -> Plan:

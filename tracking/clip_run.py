@@ -332,9 +332,8 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
         if k >= len(path.rows) - 1 or not path_valid(scene, path.poses[path.index:k + 1], convention,
                                                       tracker.vehicle):
             return None
-        pose = path.poses[k].copy()
-        return plan_at(pose, t, frame, clip.frame_scene(frame, pose=pose, track_window=config.track_window),
-                       prefix=(path, s_now, float(path.rows[k, 5])))
+        # planned in the frame's scene around the vehicle, the one the next frames check the plan against
+        return plan_at(path.poses[k].copy(), t, frame, scene, prefix=(path, s_now, float(path.rows[k, 5])))
 
     previous_pose = [np.asarray(clip.start, float)]
     rest_step_m = tracker.executor.rest_speed_mps * tracker.executor.replan_period_s

@@ -152,3 +152,19 @@ def test_the_steering_check_is_the_trackers():
     weights, executor = ChoiceWeights(), ExecutorConfig()
     assert weights.curvature_tolerance == executor.curvature_tolerance
     assert weights.sample_ds_m == executor.reference_ds_m
+
+
+def test_a_planning_margin_keeps_the_grown_footprint_clear_and_costs_see_the_real_body():
+    clip = next(c for c in load_clips("eval") if c.name == "eval-1000009")
+    scene, start = clip.frame_scene(0, pose=clip.start), np.asarray(clip.start, float)
+    planner = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=8, margin_m=0.1)
+    body = NeuralParkerPlanner.from_checkpoint(CHECKPOINT).config.env.vehicle
+    assert planner.body == body and planner.config.env.vehicle == body.inflated(0.1)
+    plan = planner.plan(scene, start)
+    assert plan.success
+    from np_sim.collision import path_valid
+
+    # the env checks its arcs at its own spacing; at 0.05 m the grown body may graze between those samples
+    assert path_valid(scene, plan.sample(0.05)[:, :3], "footprint", body.inflated(0.09))
+    with pytest.raises(ValueError, match="margin must be a finite number >= 0 m"):
+        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, margin_m=-0.1)
