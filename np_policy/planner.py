@@ -74,7 +74,9 @@ class NeuralParkerPlanner:
         ``connector`` ('fixed', 'ensemble' or 'centred', `np_sim.config.ConnectorConfig.variant`) replaces the
         checkpoint's terminal connector (paper §III-E: the 81-candidate ensemble used at evaluation only); None
         keeps it. ``samples``, ``weights``, ``seed``, ``rescue``: best-of-N sampled rollouts and the wider rounds
-        after a failure (module docstring; 0 and () = the paper's planner)."""
+        after a failure (module docstring; 0 and () = the paper's planner). ``margin_m``: the rollouts' collision
+        checks use the footprint grown by this on every side (`VehicleSpec.inflated`); the choice's costs see the
+        real body."""
         payload = load_checkpoint(path)
         config = TrainConfig.from_dict(payload["config"])
         if connector is not None:
