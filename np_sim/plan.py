@@ -6,6 +6,7 @@ curvature of SPEC §2 (positive = left; for an arc ``−sgn(l)·κ``), gear ±1 
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -74,34 +75,35 @@ class Plan:
                 rows.append([px, py, pth, steer, gear, s + abs(length) * j / n])
             x, y, th = rows[-1][:3]
             s += abs(length)
+        out = np.array(rows)
         if self.hermite is not None:
-            rows.extend(self._hermite_rows(ds, s, rows[-1]))
-        return np.array(rows)
+            hermite = self._hermite_rows(ds, s, out[-1, :3])
+            if out[-1, 4] == 0.0:
+                out[-1, 3:5] = hermite[0, 3:5]
+            out = np.vstack([out, hermite[1:]])
+        return out
 
-    def _hermite_rows(self, ds: float, s0: float, last: list[float]) -> list[list[float]]:
+    def _hermite_rows(self, ds: float, s0: float, last: np.ndarray) -> np.ndarray:
+        """Rows of the Hermite segment from its start (row 0) at spacing ≤ ``ds``, s from ``s0``."""
         # The stored points are the connector's samples of one cubic (eq:hermite, uniform t); linear interpolation
         # between them would put the whole turn of each sample interval into a curvature spike at its vertices
         # (on a 40 m segment 0.4 m apart: 5x the true curvature), so the curve is rebuilt and differentiated.
-        coeffs = hermite_coefficients(self.hermite.points)
-        t_fine = np.linspace(0.0, 1.0, 16 * max(len(self.hermite.points) - 1, 1) + 1)
-        speed = np.hypot(*_cubic(coeffs, t_fine, 1).T)
-        cum = np.concatenate([[0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * np.diff(t_fine))])
+        c = hermite_coefficients(self.hermite.points)
         gear = 1.0 if self.hermite.forward else -1.0
+        t_fine = np.linspace(0.0, 1.0, 4 * max(len(self.hermite.points) - 1, 1) + 1)[:, None]
+        speed = np.hypot(*(c[1] + t_fine * (2.0 * c[2] + 3.0 * t_fine * c[3])).T)  # |dr/dt|
+        t_fine = t_fine[:, 0]
+        cum = np.concatenate([[0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * np.diff(t_fine))])
         if not cum[-1] > 0:
-            return [[*last[:2], last[2], 0.0, gear, s0]]
+            return np.array([[*last, 0.0, gear, s0]] * 2)
         n = max(1, math.ceil(cum[-1] / ds))
         u = np.linspace(0.0, cum[-1], n + 1)
-        t = np.interp(u, cum, t_fine)
-        xy, d1, d2 = (_cubic(coeffs, t, k) for k in range(3))
+        xy, d1, d2 = _cubic_derivatives(c, np.interp(u, cum, t_fine))
         travel = np.arctan2(d1[:, 1], d1[:, 0])
-        heading = travel if gear > 0 else travel + math.pi
+        heading = np.remainder(travel + (0.0 if gear > 0 else math.pi) + math.pi, 2 * math.pi) - math.pi
         # signed geometric curvature of the travelled curve (left positive); steering = gear × that (SPEC §2)
         curvature = (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) / np.maximum(np.hypot(*d1.T), 1e-12) ** 3
-        steer = gear * curvature
-        if last[4] == 0.0:
-            last[3:5] = [steer[0], gear]
-        return [[xy[i, 0], xy[i, 1], math.remainder(heading[i], 2 * math.pi), steer[i], gear, s0 + u[i]]
-                for i in range(1, n + 1)]
+        return np.column_stack([xy, heading, gear * curvature, np.full(n + 1, gear), s0 + u])
 
 
 HERMITE_FIT_TOLERANCE_M = 1e-6
@@ -115,25 +117,29 @@ def hermite_coefficients(points) -> np.ndarray:
     pts = np.asarray(points, float)
     if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 2 or not np.all(np.isfinite(pts)):
         raise ValueError(f"HermiteSegment.points: expected finite (N >= 2, 2) samples, got shape {pts.shape}")
-    t = np.linspace(0.0, 1.0, len(pts))
-    degree = min(3, len(pts) - 1)
-    basis = t[:, None] ** np.arange(degree + 1)
-    fit = np.linalg.lstsq(basis, pts, rcond=None)[0]
+    basis, pseudo_inverse = _monomial_fit(len(pts))
+    fit = pseudo_inverse @ pts
     residual = float(np.max(np.abs(basis @ fit - pts)))
     extent = float(np.max(np.ptp(pts, axis=0)))
     if residual > HERMITE_FIT_TOLERANCE_M * max(1.0, extent):
         raise ValueError(f"HermiteSegment.points: not samples of one cubic at uniform parameter (eq:hermite): "
                          f"the fitted cubic misses them by {residual:.3g} m")
     coeffs = np.zeros((4, 2))
-    coeffs[:degree + 1] = fit
+    coeffs[:len(fit)] = fit
     return coeffs
 
 
-def _cubic(coeffs: np.ndarray, t: np.ndarray, derivative: int) -> np.ndarray:
-    """(len(t), 2) values of the cubic with monomial ``coeffs`` (or its first/second t-derivative)."""
-    powers = np.arange(4)
-    factor = np.ones(4)
-    for j in range(derivative):
-        factor = factor * np.maximum(powers - j, 0)
-    exponent = np.maximum(powers - derivative, 0)
-    return (t[:, None] ** exponent * factor) @ coeffs
+@functools.lru_cache(maxsize=8)
+def _monomial_fit(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Monomial basis (n, d+1) at t_j = j/(n−1), d = min(3, n−1), and its least-squares pseudo-inverse."""
+    basis = np.linspace(0.0, 1.0, n)[:, None] ** np.arange(min(3, n - 1) + 1)
+    return basis, np.linalg.pinv(basis)
+
+
+def _cubic_derivatives(c: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(len(t), 2) values, first and second t-derivatives of the cubic with monomial coefficients ``c`` (4, 2)."""
+    t = t[:, None]
+    value = c[0] + t * (c[1] + t * (c[2] + t * c[3]))
+    first = c[1] + t * (2.0 * c[2] + 3.0 * t * c[3])
+    second = 2.0 * c[2] + 6.0 * t * c[3]
+    return value, first, second
