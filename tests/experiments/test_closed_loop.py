@@ -44,6 +44,7 @@ def test_two_clips_run_end_to_end_and_the_known_feasible_clip_parks(tmp_path, si
         assert r["reference_point_success"] >= r["footprint_success"]
         assert (r["footprint_success"] == "1") == (r["reason"] == "")
     assert "| Hybrid A* |" in result["table"] and "| NeuralParker |" in result["table"]
+    assert "0.60 (0.93) / 7.0 / 1.20 / 0.37" in result["table"]  # the paper's column on the held-out clips
     assert json.loads((out / "records.json").read_text())[1]["planner"] == "hybrid_astar"
     assert (out / "table.md").exists() and (out / "closed_loop.rrd").stat().st_size > 0
     assert len(list((out / "rrd").glob("*.rrd"))) == 4
@@ -120,6 +121,7 @@ def test_the_difficult_training_clips_run_by_split(tmp_path, monkeypatch):
     assert config["split"] == "train-difficult" and config["clips"] == ["train-0000009"]
     assert [r["clip"] for r in result["records"]] == ["train-0000009"]
     assert "Closed loop on 1 difficult training site clips" in result["table"]
+    assert "Paper" not in result["table"]  # the paper's figures are for its held-out clips
     with pytest.raises(ValueError, match=r"\['eval-1000016'\] are not train-difficult clips \(train-0000009 …"):
         main(["--clips", "--split", "train-difficult", "--clip-names", KNOWN_FEASIBLE, "--planners", "hybrid_astar",
               "--no-render", "--out", str(tmp_path / "bad")])
