@@ -51,11 +51,10 @@ def config_differences(expected: dict[str, Any], got: dict[str, Any]) -> list[st
     return _diff(expected, got, "")
 
 
-def load_checkpoint(path: str | Path, expected_config: dict[str, Any] | None = None,
-                    ignore: tuple[str, ...] = ()) -> dict[str, Any]:
+def load_checkpoint(path: str | Path, expected_config: dict[str, Any] | None = None) -> dict[str, Any]:
     """Read a checkpoint; CheckpointError naming the file and the problem when it is missing, corrupted, of
     another format, or (with ``expected_config``) trained under a different config — every differing field is
-    listed, except paths starting with one of ``ignore``."""
+    listed."""
     path = Path(path)
     if not path.exists():
         raise CheckpointError(f"{path}: checkpoint file not found")
@@ -70,14 +69,13 @@ def load_checkpoint(path: str | Path, expected_config: dict[str, Any] | None = N
         if key not in payload:
             raise CheckpointError(f"{path}: checkpoint lacks the {key!r} entry")
     if expected_config is not None:
-        check_config(path, expected_config, payload["config"], ignore)
+        check_config(path, expected_config, payload["config"])
     return payload
 
 
-def check_config(path: str | Path, expected: dict[str, Any], stored: dict[str, Any],
-                 ignore: tuple[str, ...] = ()) -> None:
+def check_config(path: str | Path, expected: dict[str, Any], stored: dict[str, Any]) -> None:
     """CheckpointError naming ``path`` and every field where the checkpoint's ``stored`` config differs from
-    ``expected``, except paths starting with one of ``ignore``."""
-    diffs = [d for d in config_differences(expected, stored) if not any(d.startswith(prefix) for prefix in ignore)]
+    ``expected``."""
+    diffs = config_differences(expected, stored)
     if diffs:
         raise CheckpointError(f"{path}: checkpoint config differs from the expected one:\n  " + "\n  ".join(diffs))
