@@ -10,7 +10,9 @@ and, by ``ClipRunConfig.replan``:
 * ``"on_invalid"`` (default): the planner replans from the simulated reference-point pose when the rest of the
   followed plan is no longer valid in this frame's scene (under the planner's own collision convention) or the
   vehicle is more than ``deviation_m`` off it or stands at its end outside the parking tolerance (the executor
-  then holds the vehicle for up to ``ExecutorConfig.hold_max_s``); the tracker follows the newest successful plan;
+  then holds the vehicle for up to ``ExecutorConfig.hold_max_s``); the tracker follows the newest successful plan.
+  With ``ClipRunConfig.stitch`` a moving vehicle that is on its plan replans from the pose of that plan it can
+  still stop at and drives the plan up to there first (`tracking.stitching`);
 * ``"every_frame"``: the planner replans at every frame and the tracker always switches to the newest plan. With
   a search planner this never settles (successive plans from a moving vehicle pick different manoeuvres: Hybrid
   A* on eval-1000001 switched plans 529 times and timed out after 60 s), hence the default.
