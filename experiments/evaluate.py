@@ -1,13 +1,14 @@
 """Evaluate NeuralParker checkpoints on a benchmark's frozen test starts (paper §III-A protocol, Table I style).
 
 ``python -m experiments.evaluate --benchmark factorial --checkpoints a.pt [b.pt c.pt]
-[--connector fixed|ensemble|centred] [--samples N] [--out DIR]``
+[--connector fixed|ensemble|centred] [--samples N | --action sample [--action-seed S]] [--out DIR]``
 
 Each checkpoint is one training seed. Every frozen start (1,080 Factorial, 720 Topology-Stress) is planned with
 the deterministic policy and the checkpoint's environment rules (``--connector`` swaps the terminal connector at
 evaluation time only: the paper's "ensemble, evaluation only" row; ``centred`` is the fixed nine tried
 target-aligned first, `np_sim.config.ConnectorConfig.variant`; ``--samples N`` plans with the best of the mean
-rollout and N seeded sampled rollouts, `np_policy.sampling`, beyond the paper). Success is on the full set; path
+rollout and N seeded sampled rollouts, `np_policy.sampling`, beyond the paper; ``--action sample`` plays one
+rollout of sampled actions instead of the mean, as a Tianshou policy acts at test time by default). Success is on the full set; path
 length L, reversals and Δκ (eq:metrics) on the common-success cohort — here the episodes every evaluated seed
 solved — reported as the mean ± sample SD over seeds; plan time as median and 90th percentile. Writes
 ``records.csv`` and ``records.json`` (one row per episode), ``table.md`` and ``config.json`` into the run folder.
@@ -24,27 +25,32 @@ import numpy as np
 from tqdm import tqdm
 
 from experiments.common import git_commit, mean_sd, run_folder, write_records
-from np_policy.planner import NeuralParkerPlanner
+from np_policy.planner import ACTIONS, NeuralParkerPlanner
 from np_sim.benchmarks import frozen_starts, load_benchmark
 from np_sim.config import CONNECTOR_VARIANTS
 
 
 def evaluate(benchmark: str, checkpoints: list[Path], connector: str | None = None, out: Path | None = None,
-             limit: int | None = None, progress: bool = True, samples: int = 0) -> dict[str, Any]:
-    """Plan every frozen start with every checkpoint (best of N sampled rollouts with ``samples``); returns the
-    records and the table text."""
+             limit: int | None = None, progress: bool = True, samples: int = 0, action: str = "mean",
+             action_seed: int = 0) -> dict[str, Any]:
+    """Plan every frozen start with every checkpoint (best of N sampled rollouts with ``samples``; one sampled
+    rollout with ``action='sample'``, its noise seeded by ``action_seed`` and the start); returns the records and
+    the table text."""
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
     folder = run_folder("evaluate", out)
     episodes = [(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])][:limit]
     records: list[dict[str, Any]] = []
     for seed_index, path in enumerate(checkpoints):
-        planner = NeuralParkerPlanner.from_checkpoint(path, connector, samples=samples)
+        planner = NeuralParkerPlanner.from_checkpoint(path, connector, samples=samples, seed=action_seed,
+                                                      action=action)
+        method = (f"NeuralParker, best of 1 + {samples}" if samples else
+                  f"NeuralParker, sampled actions (seed {action_seed})" if action == "sample" else "NeuralParker")
         for k, j in tqdm(episodes, desc=f"{Path(path).name}", unit="ep", disable=not progress):
             plan = planner.plan(scenes[k], starts[k, j])
             L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))
             records.append({"scene": scenes[k].name, "start_id": j,
-                            "method": f"NeuralParker, best of 1 + {samples}" if samples else "NeuralParker",
+                            "method": method,
                             "connector": connector or planner.config.env.connector.mode, "checkpoint": str(path),
                             "seed": planner.config.seed, "seed_index": seed_index, "success": int(plan.success),
                             "reason": plan.reason, "L": L, "reversals": rev, "delta_kappa": dk,
@@ -54,6 +60,7 @@ def evaluate(benchmark: str, checkpoints: list[Path], connector: str | None = No
     (folder / "table.md").write_text(table + "\n")
     (folder / "config.json").write_text(json.dumps({"benchmark": benchmark, "checkpoints": [str(p) for p in checkpoints],
                                                     "connector": connector, "samples": samples,
+                                                    "action": action, "action_seed": action_seed,
                                                     "episodes": len(episodes),
                                                     "git_commit": git_commit()}, indent=2))
     return {"records": records, "table": table, "folder": folder}
@@ -85,10 +92,16 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--samples", type=int, default=0, metavar="N",
                         help="plan with the best of the mean rollout and N seeded sampled rollouts (default 0: the "
                              "paper's deterministic planner)")
+    parser.add_argument("--action", choices=ACTIONS, default="mean",
+                        help="mean (default): the deterministic planner of the paper and SPEC; sample: one rollout "
+                             "of sampled actions per start, as a Tianshou PPO policy acts at test time by default")
+    parser.add_argument("--action-seed", type=int, default=0, metavar="S",
+                        help="noise seed of --action sample (with the start pose; default 0)")
     parser.add_argument("--out", type=Path, help="run folder (default: results/evaluate/<timestamp>)")
     parser.add_argument("--limit", type=int, help="only the first N frozen episodes (smoke runs)")
     args = parser.parse_args(argv)
-    result = evaluate(args.benchmark, args.checkpoints, args.connector, args.out, args.limit, samples=args.samples)
+    result = evaluate(args.benchmark, args.checkpoints, args.connector, args.out, args.limit, samples=args.samples,
+                      action=args.action, action_seed=args.action_seed)
     print(result["table"])
     print(f"records: {result['folder'] / 'records.csv'}")
     return result

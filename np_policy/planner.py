@@ -9,7 +9,9 @@ checks, the heading gate and the Hermite selection follow exactly the env's rule
 the mean rollout and returns the successful one the tracker can steer with the lowest drive-time, reversal,
 clearance and terminal-heading cost; ``samples=0`` (the default) is the paper's planner. ``rescue`` adds wider
 rounds that run only when none of those succeeds: each ``(n, scale)`` samples ``n`` rollouts with the policy's
-standard deviation times ``scale``, in order, until one round has a successful plan.
+standard deviation times ``scale``, in order, until one round has a successful plan. ``action='sample'`` plays
+one rollout of sampled actions instead of the mean (seeded per query, `query_seed`): how a policy trained with
+Tianshou acts at test time by default, for comparisons with figures measured that way.
 """
 
 from __future__ import annotations
@@ -32,14 +34,31 @@ from np_sim.plan import Plan
 from np_sim.scene import Scene
 
 
+ACTIONS = ("mean", "sample")
+"""How the planner acts: the policy's mean action (the paper's planner, SPEC §7) or one sampled action per arc
+(each arc ``clip(μ(o) + σ·ε, −1, 1)``: what a Tianshou PPO policy plays at test time unless it is built with
+``deterministic_eval=True``)."""
+
+
+def query_seed(seed: int, start) -> np.random.SeedSequence:
+    """The noise seed of one ``action='sample'`` query: the planner's ``seed`` and the start pose's bits, so the
+    same query gives the same plan and different starts draw independent noise."""
+    return np.random.SeedSequence([int(seed), *np.asarray(start, np.float64).reshape(3).view(np.uint64).tolist()])
+
+
 class NeuralParkerPlanner:
     """A trained policy as a planner."""
 
     def __init__(self, model: ActorCritic, config: TrainConfig, samples: int = 0,
                  weights: ChoiceWeights | None = None, seed: int = 0, rescue: Sequence[tuple[int, float]] = (),
-                 margin_m: float = 0.0):
+                 margin_m: float = 0.0, action: str = "mean"):
         if int(samples) < 0:
             raise ValueError(f"NeuralParkerPlanner: samples must be >= 0, got {samples!r}")
+        if action not in ACTIONS:
+            raise ValueError(f"NeuralParkerPlanner: action must be one of {ACTIONS}, got {action!r}")
+        if action == "sample" and (samples or rescue):
+            raise ValueError("NeuralParkerPlanner: action='sample' plays one sampled rollout; it does not combine "
+                             f"with samples ({samples}) or rescue rounds ({list(rescue)})")
         for n, scale in rescue:
             if int(n) < 1 or not scale > 0:
                 raise ValueError(f"NeuralParkerPlanner: rescue rounds must be (n >= 1, scale > 0), got {(n, scale)!r}")
@@ -53,6 +72,8 @@ class NeuralParkerPlanner:
         self.weights = ChoiceWeights() if weights is None else weights
         std = self.model.log_std.detach().exp().numpy()
         self.sampled = SampledRollouts(self.actor, std, config.env, samples, seed) if samples else None
+        self.seed = int(seed)
+        self.single = SampledRollouts(self.actor, std, config.env, 1, seed) if action == "sample" else None
         self.rescue = [SampledRollouts(self.actor, std * scale, config.env, n, seed + 1 + k)
                        for k, (n, scale) in enumerate(rescue)]
         self._envs: weakref.WeakKeyDictionary[Scene, ParkingEnv] = weakref.WeakKeyDictionary()
@@ -68,7 +89,8 @@ class NeuralParkerPlanner:
     @classmethod
     def from_checkpoint(cls, path: str | Path, connector: str | None = None, samples: int = 0,
                         weights: ChoiceWeights | None = None, seed: int = 0,
-                        rescue: Sequence[tuple[int, float]] = (), margin_m: float = 0.0) -> "NeuralParkerPlanner":
+                        rescue: Sequence[tuple[int, float]] = (), margin_m: float = 0.0,
+                        action: str = "mean") -> "NeuralParkerPlanner":
         """Rebuild the network and env config stored in a checkpoint (CheckpointError on a bad file).
 
         ``connector`` ('fixed', 'ensemble' or 'centred', `np_sim.config.ConnectorConfig.variant`) replaces the
@@ -76,7 +98,8 @@ class NeuralParkerPlanner:
         keeps it. ``samples``, ``weights``, ``seed``, ``rescue``: best-of-N sampled rollouts and the wider rounds
         after a failure (module docstring; 0 and () = the paper's planner). ``margin_m``: the rollouts' collision
         checks use the footprint grown by this on every side (`VehicleSpec.inflated`); the choice's costs see the
-        real body."""
+        real body. ``action``: 'mean' (the deterministic planner, default) or 'sample' (one rollout of sampled
+        actions, `plan`)."""
         payload = load_checkpoint(path)
         config = TrainConfig.from_dict(payload["config"])
         if connector is not None:
@@ -85,12 +108,17 @@ class NeuralParkerPlanner:
             config = dataclasses.replace(config, env=env)
         model = ActorCritic(config.env.observation, config.network)
         model.load_state_dict(payload["model"])
-        return cls(model, config, samples=samples, weights=weights, seed=seed, rescue=rescue, margin_m=margin_m)
+        return cls(model, config, samples=samples, weights=weights, seed=seed, rescue=rescue, margin_m=margin_m,
+                   action=action)
 
     def plan(self, scene: Scene, start) -> Plan:
         """Roll out the mean action from ``start`` until success, collision or the arc budget (paper §III-A); with
-        ``samples``, the best of that and the sampled rollouts (``np_policy.sampling.choose``)."""
+        ``samples``, the best of that and the sampled rollouts (``np_policy.sampling.choose``); with
+        ``action='sample'``, one rollout of sampled actions."""
         t0 = time.perf_counter()
+        if self.single is not None:
+            plan = self.single(scene, start, seed=query_seed(self.seed, start))[0]
+            return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0)
         plan = self._mean_rollout(scene, start)
         if self.sampled is not None:
             plan = choose([plan, *self.sampled(scene, start)], scene, self.body, self.weights)

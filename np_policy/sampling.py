@@ -76,11 +76,12 @@ class SampledRollouts:
             self._cores[scene] = core
         return core
 
-    def __call__(self, scene: Scene, start) -> list[Plan]:
-        """The ``n`` rollouts from ``start`` as plans, successful or not (ConfigError on a start in collision)."""
+    def __call__(self, scene: Scene, start, seed=None) -> list[Plan]:
+        """The ``n`` rollouts from ``start`` as plans, successful or not (ConfigError on a start in collision);
+        ``seed`` (anything ``np.random.default_rng`` takes) replaces the generator's seed for this call."""
         start = np.asarray(start, float)
         core = self._core(scene)
-        rng = np.random.default_rng(self.seed)
+        rng = np.random.default_rng(self.seed if seed is None else seed)
         rows = np.arange(self.n)
         core.reset_envs(rows, rng, 0, start)
         scale = np.array([self.config.vehicle.kappa_max, self.config.episode.max_length_m])

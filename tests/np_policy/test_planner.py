@@ -77,6 +77,13 @@ def test_evaluate_cli_writes_records_and_table(planner, tmp_path):
     # the mean rollout is among the candidates, so best-of-N solves every start the mean action solves
     solved = {(r["scene"], int(r["start_id"])) for r in rows[:6] if r["success"] == "1"}
     assert solved <= {(r["scene"], r["start_id"]) for r in best["records"] if r["success"]}
+    sampled = main(["--benchmark", "factorial", "--checkpoints", str(ckpt), "--connector", "fixed", "--action",
+                    "sample", "--action-seed", "4", "--out", str(tmp_path / "sampled"), "--limit", "6"])
+    assert "| NeuralParker, sampled actions (seed 4) (" in sampled["table"]
+    config = json.loads((tmp_path / "sampled" / "config.json").read_text())
+    assert (config["action"], config["action_seed"]) == ("sample", 4)
+    with pytest.raises(SystemExit):
+        main(["--benchmark", "factorial", "--checkpoints", str(ckpt), "--action", "greedy"])
 
 
 def test_the_connector_can_be_swapped_at_load_and_a_bad_mode_is_named(planner, tmp_path):

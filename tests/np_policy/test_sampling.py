@@ -168,3 +168,28 @@ def test_a_planning_margin_keeps_the_grown_footprint_clear_and_costs_see_the_rea
     assert path_valid(scene, plan.sample(0.05)[:, :3], "footprint", body.inflated(0.09))
     with pytest.raises(ValueError, match="margin must be a finite number >= 0 m"):
         NeuralParkerPlanner.from_checkpoint(CHECKPOINT, margin_m=-0.1)
+
+
+def test_sampled_action_planner_draws_its_first_arc_from_the_seeded_gaussian(problem):
+    """action='sample': arc 1 is clip(μ(o₀) + σ·ε, −1, 1) × (κ_max, l_max) with ε the first normal draw of the
+    query's seed (planner seed + start bits); the same query replays, another start or seed draws other noise."""
+    from np_policy.planner import query_seed
+    from np_sim.env import ParkingEnv
+
+    scene, start = problem
+    planner = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, seed=5, action="sample")
+    plan = planner.plan(scene, start)
+    np.testing.assert_array_equal(plan.arcs, planner.plan(scene, start).arcs)
+    obs, _ = ParkingEnv(scene, planner.config.env).reset(options={"start": start})
+    eps = np.random.default_rng(query_seed(5, start)).standard_normal((1, 2))[0]
+    std = planner.model.log_std.detach().exp().numpy()
+    expected = np.clip(planner.actor(obs) + std * eps, -1.0, 1.0)
+    scale = np.array([planner.config.env.vehicle.kappa_max, planner.config.env.episode.max_length_m])
+    np.testing.assert_allclose(plan.arcs[0], expected * scale, rtol=1e-9)
+    other = start + np.array([0.0, 0.0, 1e-9])
+    assert not np.array_equal(query_seed(5, start).generate_state(4), query_seed(5, other).generate_state(4))
+    assert not np.array_equal(query_seed(5, start).generate_state(4), query_seed(6, start).generate_state(4))
+    with pytest.raises(ValueError, match=r"action must be one of \('mean', 'sample'\), got 'mode'"):
+        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, action="mode")
+    with pytest.raises(ValueError, match=r"action='sample' plays one sampled rollout; it does not combine"):
+        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, action="sample", samples=4)
