@@ -9,7 +9,8 @@ checks, the heading gate and the Hermite selection follow exactly the env's rule
 the mean rollout and returns the successful one the tracker can steer with the lowest drive-time, reversal,
 clearance and terminal-heading cost; ``samples=0`` (the default) is the paper's planner. ``rescue`` adds wider
 rounds that run only when none of those succeeds: each ``(n, scale)`` samples ``n`` rollouts with the policy's
-standard deviation times ``scale``, in order, until one round has a successful plan. ``action='sample'`` plays
+standard deviation times ``scale``, in order, until one round has a successful plan (with
+``rescue_clearance_m``, a plan keeping at least that clearance). ``action='sample'`` plays
 one rollout of sampled actions instead of the mean (seeded per query, `query_seed`): how a policy trained with
 Tianshou acts at test time by default, for comparisons with figures measured that way.
 """
@@ -27,7 +28,7 @@ import numpy as np
 from np_policy.checkpoint import load_checkpoint
 from np_policy.inference import CompiledActor
 from np_policy.network import ActorCritic
-from np_policy.sampling import ChoiceWeights, SampledRollouts, choose, end_reason, hermite_of
+from np_policy.sampling import ChoiceWeights, SampledRollouts, choose, clearance_level, end_reason, hermite_of
 from np_policy.train import TrainConfig
 from np_sim.env import ParkingEnv
 from np_sim.plan import Plan
@@ -51,7 +52,7 @@ class NeuralParkerPlanner:
 
     def __init__(self, model: ActorCritic, config: TrainConfig, samples: int = 0,
                  weights: ChoiceWeights | None = None, seed: int = 0, rescue: Sequence[tuple[int, float]] = (),
-                 margin_m: float = 0.0, action: str = "mean"):
+                 margin_m: float = 0.0, action: str = "mean", rescue_clearance_m: float = 0.0):
         if int(samples) < 0:
             raise ValueError(f"NeuralParkerPlanner: samples must be >= 0, got {samples!r}")
         if action not in ACTIONS:
@@ -59,6 +60,8 @@ class NeuralParkerPlanner:
         if action == "sample" and (samples or rescue):
             raise ValueError("NeuralParkerPlanner: action='sample' plays one sampled rollout; it does not combine "
                              f"with samples ({samples}) or rescue rounds ({list(rescue)})")
+        if not rescue_clearance_m >= 0:
+            raise ValueError(f"NeuralParkerPlanner: rescue_clearance_m must be >= 0 m, got {rescue_clearance_m!r}")
         for n, scale in rescue:
             if int(n) < 1 or not scale > 0:
                 raise ValueError(f"NeuralParkerPlanner: rescue rounds must be (n >= 1, scale > 0), got {(n, scale)!r}")
@@ -76,6 +79,7 @@ class NeuralParkerPlanner:
         self.single = SampledRollouts(self.actor, std, config.env, 1, seed) if action == "sample" else None
         self.rescue = [SampledRollouts(self.actor, std * scale, config.env, n, seed + 1 + k)
                        for k, (n, scale) in enumerate(rescue)]
+        self.rescue_clearance_m = float(rescue_clearance_m)
         self._envs: weakref.WeakKeyDictionary[Scene, ParkingEnv] = weakref.WeakKeyDictionary()
 
     def _env(self, scene: Scene) -> ParkingEnv:
@@ -90,7 +94,7 @@ class NeuralParkerPlanner:
     def from_checkpoint(cls, path: str | Path, connector: str | None = None, samples: int = 0,
                         weights: ChoiceWeights | None = None, seed: int = 0,
                         rescue: Sequence[tuple[int, float]] = (), margin_m: float = 0.0,
-                        action: str = "mean") -> "NeuralParkerPlanner":
+                        action: str = "mean", rescue_clearance_m: float = 0.0) -> "NeuralParkerPlanner":
         """Rebuild the network and env config stored in a checkpoint (CheckpointError on a bad file).
 
         ``connector`` ('fixed', 'ensemble' or 'centred', `np_sim.config.ConnectorConfig.variant`) replaces the
@@ -99,7 +103,9 @@ class NeuralParkerPlanner:
         after a failure (module docstring; 0 and () = the paper's planner). ``margin_m``: the rollouts' collision
         checks use the footprint grown by this on every side (`VehicleSpec.inflated`); the choice's costs see the
         real body. ``action``: 'mean' (the deterministic planner, default) or 'sample' (one rollout of sampled
-        actions, `plan`)."""
+        actions, `plan`). ``rescue_clearance_m``: the rescue rounds also run while the chosen plan's clearance
+        level (`np_policy.sampling.clearance_level` on ``weights.margins_m``) is below this (m); 0 = only after
+        a failure."""
         payload = load_checkpoint(path)
         config = TrainConfig.from_dict(payload["config"])
         if connector is not None:
@@ -109,7 +115,7 @@ class NeuralParkerPlanner:
         model = ActorCritic(config.env.observation, config.network)
         model.load_state_dict(payload["model"])
         return cls(model, config, samples=samples, weights=weights, seed=seed, rescue=rescue, margin_m=margin_m,
-                   action=action)
+                   action=action, rescue_clearance_m=rescue_clearance_m)
 
     def plan(self, scene: Scene, start) -> Plan:
         """Roll out the mean action from ``start`` until success, collision or the arc budget (paper §III-A); with
@@ -123,10 +129,17 @@ class NeuralParkerPlanner:
         if self.sampled is not None:
             plan = choose([plan, *self.sampled(scene, start)], scene, self.body, self.weights)
         for rounds in self.rescue:
-            if plan.success:
+            if plan.success and not self._too_close(scene, plan):
                 break
             plan = choose([plan, *rounds(scene, start)], scene, self.body, self.weights)
         return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0)
+
+    def _too_close(self, scene: Scene, plan: Plan) -> bool:
+        """The plan keeps less clearance than ``rescue_clearance_m`` (module docstring)."""
+        if self.rescue_clearance_m <= 0.0:
+            return False
+        poses = plan.sample(self.weights.sample_ds_m)[:, :3]
+        return clearance_level(scene, poses, self.body, self.weights.margins_m) < self.rescue_clearance_m
 
     def _mean_rollout(self, scene: Scene, start) -> Plan:
         env = self._env(scene)

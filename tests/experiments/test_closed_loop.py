@@ -90,9 +90,13 @@ def test_footprint_samples_and_connector_reach_the_planner_and_the_config(tmp_pa
     assert config["footprint_rescue"] == [[8, 2.0]]
     table = (out / "table.md").read_text()
     assert "best of its mean rollout and 4 sampled rollouts" in table and "terminal connector: centred" in table
-    assert "When none of them succeeds it samples 8 at 2 σ (--footprint-rescue)." in table
+    assert ("When none of them succeeds or the best keeps less than 0.2 m clearance it samples 8 at 2 σ "
+            "(--footprint-rescue)." in table)
+    assert config["footprint_rescue_clearance_m"] == 0.2
     default = build_planners(["neuralparker_footprint"], PlannerSettings())["neuralparker_footprint"]
-    assert [r.n for r in default.rescue] == [128, 128]
+    assert [r.n for r in default.rescue] == [128, 128] and default.rescue_clearance_m == 0.2
+    off = build_planners(["neuralparker_footprint"], PlannerSettings(footprint_rescue_clearance_m=0.0))
+    assert off["neuralparker_footprint"].rescue_clearance_m == 0.0
     for rounds, scale in zip(default.rescue, (2.0, 3.0)):
         assert rounds.std == pytest.approx(scale * default.sampled.std)
     with pytest.raises(SystemExit):

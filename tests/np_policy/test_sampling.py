@@ -193,3 +193,25 @@ def test_sampled_action_planner_draws_its_first_arc_from_the_seeded_gaussian(pro
         NeuralParkerPlanner.from_checkpoint(CHECKPOINT, action="mode")
     with pytest.raises(ValueError, match=r"action='sample' plays one sampled rollout; it does not combine"):
         NeuralParkerPlanner.from_checkpoint(CHECKPOINT, action="sample", samples=4)
+
+
+def test_rescue_rounds_also_run_for_a_plan_short_of_the_wanted_clearance(problem):
+    """rescue_clearance_m: a successful plan whose clearance level is below it gets the rescue rounds and the
+    choice among it and their rollouts; at or above it the plan is returned as it is."""
+    scene, start = problem
+    base = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=16, seed=3)
+    plan = base.plan(scene, start)
+    assert plan.success
+    level = clearance_level(scene, plan.sample(0.05)[:, :3], base.body, base.weights.margins_m)
+    assert level == 0.1  # this start's best of 17 passes its obstacles at 0.1-0.2 m
+    kept = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=16, seed=3, rescue=((64, 2.0),),
+                                               rescue_clearance_m=level)
+    np.testing.assert_array_equal(kept.plan(scene, start).arcs, plan.arcs)
+    rescued = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=16, seed=3, rescue=((64, 2.0),),
+                                                  rescue_clearance_m=level + 0.05)
+    expected = choose([plan, *rescued.rescue[0](scene, start)], scene, base.body, base.weights)
+    better = rescued.plan(scene, start)
+    np.testing.assert_array_equal(better.arcs, expected.arcs)
+    assert clearance_level(scene, better.sample(0.05)[:, :3], base.body, base.weights.margins_m) == 0.2
+    with pytest.raises(ValueError, match=r"rescue_clearance_m must be >= 0 m, got -0.1"):
+        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, rescue_clearance_m=-0.1)
