@@ -4,7 +4,8 @@ Table ``tab:realworld``, App. C, Fig. ``fig:searchtime``; SPEC §8).
 ``python -m experiments.closed_loop --clips [--clips-limit N | --clip-names NAME ...] [--planners neuralparker
 neuralparker_footprint np_guided_astar hybrid_astar] [--checkpoint PATH] [--footprint-checkpoint PATH] [--no-render]
 [--render-clips K] [--out DIR] [--workers N] [--controller lqr] [--connector C] [--footprint-connector C]
-[--footprint-samples N] [--footprint-rescue N:SCALE ...] [--split eval|train-difficult]``
+[--footprint-samples N] [--footprint-rescue N:SCALE ...] [--footprint-rescue-clearance M] [--split eval|train-difficult]
+[--stitch] [--track-window K] [--search-margin M] [--footprint-margin M]``
 
 For every evaluation clip and planner, `tracking.clip_run.run_clip` starts the MuJoCo vehicle at the clip's start
 pose in the clip's ground truth (static objects, moving pedestrians and carts, the site boundary as walls), plans
@@ -15,7 +16,8 @@ records both verdicts: **footprint success** (no chassis contact with a ground-t
 object nor outside the boundary). Planners: NeuralParker (the site checkpoint, paper-faithful reference-point
 training), "NeuralParker (footprint)" (``checkpoints/site_np_footprint.pt``, trained under the footprint
 convention, playing the best of its mean rollout and ``--footprint-samples`` seeded sampled rollouts,
-`np_policy.sampling`, then wider rescue rounds when none succeeds, with the ``centred`` connector order; by
+`np_policy.sampling`, then wider rescue rounds when none succeeds or the best keeps less than 0.2 m of clearance,
+with the ``centred`` connector order; by
 default its row is left out with a note when the file is missing), NP-Guided A* and Hybrid A* (both searching under the footprint convention).
 
 The table is the ``tab:realworld`` analogue — footprint success with reference-point success in parentheses, L
