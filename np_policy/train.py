@@ -40,6 +40,7 @@ from np_sim.site import SITE_OBSERVATION
 from np_sim.starts import UniformStartSampler, fixed_start_sampler
 
 BENCHMARKS = ("factorial", "topology", "examples", "site")
+CURRICULUM_REGIONS = ("start_region", "lot")
 SITE_POOL_FILE = "site_pool.pkl"
 """The site run's reset pool, kept in the run folder so --resume does not draw it again (not committed)."""
 
@@ -58,6 +59,11 @@ class TrainConfig:
     """torch intra-op threads (0 = all cores)."""
     curriculum_pool: int = 256
     """Start poses per scene in the geodesic curriculum pool."""
+    curriculum_region: str = "start_region"
+    """Where the curriculum pool is drawn: 'start_region' (each scene's start region, SPEC §5's reading of the
+    paper's "5 % of the available range") or, beyond that reading, 'lot' (anywhere in the scene's drivable lot
+    that is connected to the target, so the nearest 5 % start next to the bay; a reverse curriculum in the sense
+    of Florensa et al. 2017). Selection episodes keep the start regions either way."""
     site_pool: int = 8192
     """Site only: (scene, start) training resets drawn once from the training clips (``np_sim.clips.training_pool``)."""
     site_recorded_share: float = 0.0
@@ -76,6 +82,9 @@ class TrainConfig:
         if self.benchmark not in BENCHMARKS and not _is_scene_path(self.benchmark):
             raise ConfigError(f"TrainConfig.benchmark: expected one of {list(BENCHMARKS)} or the path of a scene "
                               f"JSON file or folder, got {self.benchmark!r}")
+        if self.curriculum_region not in CURRICULUM_REGIONS:
+            raise ConfigError(f"TrainConfig.curriculum_region: expected one of {CURRICULUM_REGIONS}, got "
+                              f"{self.curriculum_region!r}")
         if not 0.0 <= self.site_recorded_share <= 1.0:
             raise ConfigError(f"TrainConfig.site_recorded_share: expected a share in [0, 1], "
                               f"got {self.site_recorded_share!r}")
@@ -164,6 +173,14 @@ def training_scenes(benchmark: str):
     return load_benchmark(benchmark, "train")
 
 
+def curriculum_scenes(scenes: list[Scene], region: str) -> list[Scene]:
+    """The scenes the curriculum pool is drawn from (`TrainConfig.curriculum_region`): the training scenes
+    themselves, or ('lot') the same scenes with the whole drivable lot (the boundary polygon) as start region."""
+    if region == "start_region":
+        return list(scenes)
+    return [dataclasses.replace(scene, start_region=scene.boundary) for scene in scenes]
+
+
 def recorded_clips(skip: int) -> list:
     """The difficult training clips (`np_sim.clips.clip_difficulty`) after the first ``skip``: where recorded
     resets come from (``TrainConfig.site_recorded_share``)."""
@@ -195,7 +212,8 @@ class Trainer:
             select_sampler = fixed_start_sampler(starts)
         else:
             self.scenes = training_scenes(config.benchmark)
-            self.sampler = CurriculumStartSampler(self.scenes, fraction=config.curriculum.start_fraction,
+            self.sampler = CurriculumStartSampler(curriculum_scenes(self.scenes, config.curriculum_region),
+                                                  fraction=config.curriculum.start_fraction,
                                                   pool_size=config.curriculum_pool, seed=config.seed)
             select_sampler = UniformStartSampler(self.scenes, config.env.vehicle)
         self.envs = ParkingVectorEnv(self.scenes, ppo.num_train_envs, config.env, seed=config.seed,

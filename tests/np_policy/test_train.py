@@ -183,3 +183,29 @@ def test_recorded_resets_are_a_site_option_drawn_from_the_difficult_training_cli
     assert [c.name for c in train_module.recorded_clips(2)] == [c.name for c in clips[2:]]
     with pytest.raises(ConfigError, match="5 leaves none of the 5 difficult training clips"):
         train_module.recorded_clips(5)
+
+
+def test_the_curriculum_pool_can_cover_the_whole_lot():
+    """curriculum_region='lot': the pool is drawn from the scenes with their boundary as start region, so its
+    nearest starts lie by the bay (inside the geodesic distance of the start region's nearest start) while the
+    env's scenes and the selection episodes keep their start regions; an unknown region is named."""
+    import numpy as np
+    import shapely
+
+    from np_policy.train import curriculum_scenes, training_scenes
+    from np_sim.curriculum import CurriculumStartSampler
+
+    scenes = training_scenes("examples")[:2]
+    assert curriculum_scenes(scenes, "start_region") == scenes
+    lot = curriculum_scenes(scenes, "lot")
+    for scene, whole in zip(scenes, lot):
+        np.testing.assert_array_equal(whole.start_region, scene.boundary)
+        assert whole.obstacles == scene.obstacles and np.array_equal(whole.target, scene.target)
+    near = CurriculumStartSampler(lot, pool_size=64, seed=0)
+    region = CurriculumStartSampler(scenes, pool_size=64, seed=0)
+    assert np.all(near.distance[:, 0] < region.distance[:, 0])
+    outside = [not shapely.Polygon(s.start_region).covers(shapely.Point(*p[:2])) for s, pool in zip(scenes, near.pool)
+               for p in pool]
+    assert any(outside)
+    with pytest.raises(ConfigError, match=r"TrainConfig.curriculum_region: expected one of \('start_region', 'lot'\)"):
+        TrainConfig(curriculum_region="everywhere")
