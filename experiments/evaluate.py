@@ -8,9 +8,9 @@ the deterministic policy and the checkpoint's environment rules (``--connector``
 evaluation time only: the paper's "ensemble, evaluation only" row; ``centred`` is the fixed nine tried
 target-aligned first, `np_sim.config.ConnectorConfig.variant`; ``--samples N`` plans with the best of the mean
 rollout and N seeded sampled rollouts, `np_policy.sampling`, beyond the paper; ``--action sample`` plays one
-rollout of sampled actions instead of the mean, as a Tianshou policy acts at test time by default). Success is on the full set; path
-length L, reversals and Δκ (eq:metrics) on the common-success cohort — here the episodes every evaluated seed
-solved — reported as the mean ± sample SD over seeds; plan time as median and 90th percentile. Writes
+rollout of sampled actions instead of the mean, as a Tianshou policy acts at test time by default). Success is on
+the full set; path length L, reversals and Δκ (eq:metrics) on the common-success cohort — here the episodes every
+evaluated seed solved — reported as the mean ± sample SD over seeds; plan time as median and 90th percentile. Writes
 ``records.csv`` and ``records.json`` (one row per episode), ``table.md`` and ``config.json`` into the run folder.
 """
 
@@ -96,7 +96,7 @@ def main(argv=None) -> dict[str, Any]:
                         help="mean (default): the deterministic planner of the paper and SPEC; sample: one rollout "
                              "of sampled actions per start, as a Tianshou PPO policy acts at test time by default")
     parser.add_argument("--action-seed", type=int, default=0, metavar="S",
-                        help="noise seed of --action sample (with the start pose; default 0)")
+                        help="noise seed of --action sample (with the start pose) and of --samples' rollouts (default 0)")
     parser.add_argument("--out", type=Path, help="run folder (default: results/evaluate/<timestamp>)")
     parser.add_argument("--limit", type=int, help="only the first N frozen episodes (smoke runs)")
     args = parser.parse_args(argv)
