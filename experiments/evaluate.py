@@ -100,6 +100,9 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--out", type=Path, help="run folder (default: results/evaluate/<timestamp>)")
     parser.add_argument("--limit", type=int, help="only the first N frozen episodes (smoke runs)")
     args = parser.parse_args(argv)
+    if args.action == "sample" and args.samples:
+        parser.error(f"--action sample plays one sampled rollout per start; it does not combine with --samples "
+                     f"{args.samples}")
     result = evaluate(args.benchmark, args.checkpoints, args.connector, args.out, args.limit, samples=args.samples,
                       action=args.action, action_seed=args.action_seed)
     print(result["table"])

@@ -84,6 +84,8 @@ def test_evaluate_cli_writes_records_and_table(planner, tmp_path):
     assert (config["action"], config["action_seed"]) == ("sample", 4)
     with pytest.raises(SystemExit):
         main(["--benchmark", "factorial", "--checkpoints", str(ckpt), "--action", "greedy"])
+    with pytest.raises(SystemExit):
+        main(["--benchmark", "factorial", "--checkpoints", str(ckpt), "--action", "sample", "--samples", "2"])
 
 
 def test_the_connector_can_be_swapped_at_load_and_a_bad_mode_is_named(planner, tmp_path):
