@@ -4,8 +4,8 @@ Table ``tab:realworld``, App. C, Fig. ``fig:searchtime``; SPEC §8).
 ``python -m experiments.closed_loop --clips [--clips-limit N | --clip-names NAME ...] [--planners neuralparker
 neuralparker_footprint np_guided_astar hybrid_astar] [--checkpoint PATH] [--footprint-checkpoint PATH] [--no-render]
 [--render-clips K] [--out DIR] [--workers N] [--controller lqr] [--connector C] [--footprint-connector C]
-[--footprint-samples N] [--footprint-rescue N:SCALE ...] [--footprint-rescue-clearance M] [--split eval|train-difficult]
-[--stitch] [--track-window K] [--search-margin M] [--footprint-margin M]``
+[--footprint-samples N] [--footprint-rescue N:SCALE[:FIRST] ...] [--footprint-rescue-clearance M]
+[--split eval|train-difficult] [--stitch] [--track-window K] [--search-margin M] [--footprint-margin M]``
 
 For every evaluation clip and planner, `tracking.clip_run.run_clip` starts the MuJoCo vehicle at the clip's start
 pose in the clip's ground truth (static objects, moving pedestrians and carts, the site boundary as walls), plans
@@ -17,8 +17,9 @@ object nor outside the boundary). Planners: NeuralParker (the site checkpoint, p
 training), "NeuralParker (footprint)" (``checkpoints/site_np_footprint.pt``, trained under the footprint
 convention, playing the best of its mean rollout and ``--footprint-samples`` seeded sampled rollouts,
 `np_policy.sampling`, then wider rescue rounds when none succeeds or the best keeps less than 0.2 m of clearance,
-with the ``centred`` connector order; by
-default its row is left out with a note when the file is missing), NP-Guided A* and Hybrid A* (both searching under the footprint convention).
+the last with first arcs drawn over the whole action box, with the ``centred`` connector order; by default its row
+is left out with a note when the file is missing), NP-Guided A* and Hybrid A* (both searching under the footprint
+convention).
 
 The table is the ``tab:realworld`` analogue — footprint success with reference-point success in parentheses, L
 and reversals executed on each method's own footprint successes, median plan time over all calls — plus
@@ -70,10 +71,13 @@ FOOTPRINT_CONNECTOR = "centred"
 candidate is feasible, on the edge of the 10° parking tolerance: on the held-out clips the tracker then lands a few
 tenths of a degree beyond it and replans the same manoeuvre until the time is up (3 clips). Neutral on the 94
 training clips (0.82 vs 0.83); README, "Best-of-N NeuralParker"."""
-FOOTPRINT_RESCUE: tuple[tuple[int, float], ...] = ((128, 2.0), (128, 3.0))
+FOOTPRINT_RESCUE: tuple[tuple[int, float, str], ...] = ((128, 2.0, "policy"), (128, 3.0, "policy"),
+                                                      (128, 1.0, "uniform"))
 """Default rescue rounds of NeuralParker (footprint) (`PlannerSettings.footprint_rescue`), set on the first 94
-difficult training clips: executed footprint success 0.82 without, 0.86 with these (plan_failed 4 → 0) and 0.86 with
-256 rollouts per round (README, "Best-of-N NeuralParker")."""
+difficult training clips: executed footprint success 0.82 without, 0.86 with the two policy rounds (plan_failed
+4 → 0) and 0.86 with 256 rollouts per round; with the clearance rescue 0.89, and 0.90 with the third round (first
+arc uniform over the action box, then the policy at 1 σ; 0.89 with 64 such rollouts or at 2 σ) (README,
+"Best-of-N NeuralParker")."""
 FOOTPRINT_RESCUE_CLEARANCE_M = 0.2
 """NeuralParker (footprint)'s rescue rounds also run while its best plan keeps less than this clearance (m; the
 ladder's levels are 0.2 / 0.1 / 0 m), set on the first 94 difficult training clips: executed footprint success
@@ -102,9 +106,9 @@ class PlannerSettings:
     footprint_samples: int = FOOTPRINT_SAMPLES
     """NeuralParker (footprint) plays the best of its mean rollout and this many sampled rollouts
     (`np_policy.sampling`); 0 = the paper's mean-action planner."""
-    footprint_rescue: tuple[tuple[int, float], ...] = FOOTPRINT_RESCUE
-    """NeuralParker (footprint)'s wider rounds when no rollout succeeds: (rollouts, standard-deviation scale) each,
-    in order (`np_policy.planner.NeuralParkerPlanner`); () = none."""
+    footprint_rescue: tuple[tuple[int, float, str], ...] = FOOTPRINT_RESCUE
+    """NeuralParker (footprint)'s wider rounds when no rollout succeeds: (rollouts, standard-deviation scale, first
+    arc 'policy' or 'uniform') each, in order (`np_policy.planner.NeuralParkerPlanner`); () = none."""
     footprint_margin_m: float = 0.0
     """NeuralParker (footprint)'s rollouts are checked with the footprint grown by this on every side (m)."""
     footprint_rescue_clearance_m: float = FOOTPRINT_RESCUE_CLEARANCE_M
@@ -256,7 +260,10 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
         notes.append(f"NeuralParker (footprint) plays the best of its mean rollout and {settings.footprint_samples} "
                      f"sampled rollouts (np_policy.sampling; --footprint-samples 0 = the paper's planner).")
     if "neuralparker_footprint" in names and settings.footprint_rescue:
-        rounds = ", then ".join(f"{n} at {scale:g} σ" for n, scale in settings.footprint_rescue)
+        from np_policy.planner import rescue_round
+
+        rounds = ", then ".join(f"{n} at {scale:g} σ" + (" after a uniform first arc" if first == "uniform" else "")
+                                for n, scale, first in map(rescue_round, settings.footprint_rescue))
         when = (f"none of them succeeds or the best keeps less than {settings.footprint_rescue_clearance_m:g} m "
                 f"clearance" if settings.footprint_rescue_clearance_m > 0 else "none of them succeeds")
         notes.append(f"When {when} it samples {rounds} (--footprint-rescue).")
@@ -422,15 +429,24 @@ def merge_rrd(rrd_dir: Path, out: Path) -> Path:
     return out
 
 
-def _rescue_round(text: str) -> tuple[int, float]:
-    """``N:SCALE`` → (N, SCALE) for --footprint-rescue."""
+def _rescue_text(spec: tuple[int, float, str]) -> str:
+    """(N, SCALE, FIRST) → ``N:SCALE[:FIRST]``, the inverse of `_rescue_round`."""
+    n, scale, first = spec
+    return f"{n}:{scale:g}" + ("" if first == "policy" else f":{first}")
+
+
+def _rescue_round(text: str) -> tuple[int, float, str]:
+    """``N:SCALE[:FIRST]`` → (N, SCALE, FIRST) for --footprint-rescue (FIRST 'policy' when left out)."""
+    from np_policy.sampling import FIRST_ARCS
+
+    parts = text.split(":")
     try:
-        n, scale = text.split(":")
-        value = (int(n), float(scale))
-    except ValueError:
-        value = (0, 0.0)
-    if value[0] < 1 or not value[1] > 0:
-        raise argparse.ArgumentTypeError(f"expected N:SCALE with N >= 1 rollouts and SCALE > 0, got {text!r}")
+        value = (int(parts[0]), float(parts[1]), parts[2] if len(parts) == 3 else "policy")
+    except (ValueError, IndexError):
+        value = (0, 0.0, "")
+    if len(parts) > 3 or value[0] < 1 or not value[1] > 0 or value[2] not in FIRST_ARCS:
+        raise argparse.ArgumentTypeError(f"expected N:SCALE[:FIRST] with N >= 1 rollouts, SCALE > 0 and FIRST one "
+                                         f"of {', '.join(FIRST_ARCS)}, got {text!r}")
     return value
 
 
@@ -493,10 +509,12 @@ def main(argv=None) -> dict[str, Any]:
                              f"terminal-heading cost (default {FOOTPRINT_SAMPLES}; 0 = the paper's mean-action "
                              f"planner)")
     parser.add_argument("--footprint-rescue", type=_rescue_round, nargs="*", default=list(FOOTPRINT_RESCUE),
-                        metavar="N:SCALE",
-                        help="NeuralParker (footprint): when none of its rollouts succeeds, sample N more with the "
-                             "policy's standard deviation times SCALE, round after round until one succeeds "
-                             f"(default {' '.join(f'{n}:{k:g}' for n, k in FOOTPRINT_RESCUE) or 'none'}; "
+                        metavar="N:SCALE[:FIRST]",
+                        help="NeuralParker (footprint): when none of its rollouts succeeds (or the best keeps too "
+                             "little clearance), sample N more with the policy's standard deviation times SCALE, "
+                             "round after round until one succeeds; FIRST = uniform draws each rollout's first arc "
+                             "uniformly over the action box (default policy) (default "
+                             f"{' '.join(_rescue_text(spec) for spec in FOOTPRINT_RESCUE) or 'none'}; "
                              "give no value for none)")
     args = parser.parse_args(argv)
     settings = PlannerSettings(checkpoint=args.checkpoint, footprint_checkpoint=args.footprint_checkpoint,

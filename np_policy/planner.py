@@ -10,7 +10,9 @@ the mean rollout and returns the successful one the tracker can steer with the l
 clearance and terminal-heading cost; ``samples=0`` (the default) is the paper's planner. ``rescue`` adds wider
 rounds that run only when none of those succeeds: each ``(n, scale)`` samples ``n`` rollouts with the policy's
 standard deviation times ``scale``, in order, until one round has a successful plan (with
-``rescue_clearance_m``, a plan keeping at least that clearance). ``action='sample'`` plays
+``rescue_clearance_m``, a plan keeping at least that clearance). A round ``(n, scale, 'uniform')`` draws each
+rollout's first arc uniformly over the action box instead (`np_policy.sampling.FIRST_ARCS`): the escape from a
+start where the policy's own first arcs all collide. ``action='sample'`` plays
 one rollout of sampled actions instead of the mean (seeded per query, `query_seed`): how a policy trained with
 Tianshou acts at test time by default, for comparisons with figures measured that way.
 """
@@ -28,7 +30,8 @@ import numpy as np
 from np_policy.checkpoint import load_checkpoint
 from np_policy.inference import CompiledActor
 from np_policy.network import ActorCritic
-from np_policy.sampling import ChoiceWeights, SampledRollouts, choose, clearance_level, end_reason, hermite_of
+from np_policy.sampling import (FIRST_ARCS, ChoiceWeights, SampledRollouts, choose, clearance_level, end_reason,
+                                hermite_of)
 from np_policy.train import TrainConfig
 from np_sim.env import ParkingEnv
 from np_sim.plan import Plan
@@ -41,6 +44,24 @@ ACTIONS = ("mean", "sample")
 ``deterministic_eval=True``)."""
 
 
+RescueRound = tuple[int, float] | tuple[int, float, str]
+"""One rescue round: (rollouts, standard-deviation scale[, first arc: 'policy' (default) or 'uniform'])."""
+
+
+def rescue_round(spec: Sequence) -> tuple[int, float, str]:
+    """A rescue round as (n, scale, first_arc), the first arc 'policy' when left out; ValueError naming what is
+    wrong otherwise."""
+    spec = tuple(spec)
+    if len(spec) not in (2, 3):
+        raise ValueError(f"NeuralParkerPlanner: a rescue round is (n, scale[, first_arc]), got {spec!r}")
+    n, scale, first_arc = (*spec, "policy")[:3]
+    if int(n) != n or int(n) < 1 or not scale > 0:
+        raise ValueError(f"NeuralParkerPlanner: rescue rounds must be (n >= 1, scale > 0), got {spec!r}")
+    if first_arc not in FIRST_ARCS:
+        raise ValueError(f"NeuralParkerPlanner: a rescue round's first arc must be one of {FIRST_ARCS}, got {spec!r}")
+    return int(n), float(scale), first_arc
+
+
 def query_seed(seed: int, start) -> np.random.SeedSequence:
     """The noise seed of one ``action='sample'`` query: the planner's ``seed`` and the start pose's bits, so the
     same query gives the same plan and different starts draw independent noise."""
@@ -51,7 +72,7 @@ class NeuralParkerPlanner:
     """A trained policy as a planner."""
 
     def __init__(self, model: ActorCritic, config: TrainConfig, samples: int = 0,
-                 weights: ChoiceWeights | None = None, seed: int = 0, rescue: Sequence[tuple[int, float]] = (),
+                 weights: ChoiceWeights | None = None, seed: int = 0, rescue: Sequence[RescueRound] = (),
                  margin_m: float = 0.0, action: str = "mean", rescue_clearance_m: float = 0.0):
         if int(samples) < 0:
             raise ValueError(f"NeuralParkerPlanner: samples must be >= 0, got {samples!r}")
@@ -62,9 +83,7 @@ class NeuralParkerPlanner:
                              f"with samples ({samples}) or rescue rounds ({list(rescue)})")
         if not rescue_clearance_m >= 0:
             raise ValueError(f"NeuralParkerPlanner: rescue_clearance_m must be >= 0 m, got {rescue_clearance_m!r}")
-        for n, scale in rescue:
-            if int(n) < 1 or not scale > 0:
-                raise ValueError(f"NeuralParkerPlanner: rescue rounds must be (n >= 1, scale > 0), got {(n, scale)!r}")
+        rescue = [rescue_round(spec) for spec in rescue]
         self.model = model.eval()
         self.actor = CompiledActor(self.model)
         self.body = config.env.vehicle
@@ -77,8 +96,8 @@ class NeuralParkerPlanner:
         self.sampled = SampledRollouts(self.actor, std, config.env, samples, seed) if samples else None
         self.seed = int(seed)
         self.single = SampledRollouts(self.actor, std, config.env, 1, seed) if action == "sample" else None
-        self.rescue = [SampledRollouts(self.actor, std * scale, config.env, n, seed + 1 + k)
-                       for k, (n, scale) in enumerate(rescue)]
+        self.rescue = [SampledRollouts(self.actor, std * scale, config.env, n, seed + 1 + k, first_arc)
+                       for k, (n, scale, first_arc) in enumerate(rescue)]
         self.rescue_clearance_m = float(rescue_clearance_m)
         self._envs: weakref.WeakKeyDictionary[Scene, ParkingEnv] = weakref.WeakKeyDictionary()
 
@@ -93,7 +112,7 @@ class NeuralParkerPlanner:
     @classmethod
     def from_checkpoint(cls, path: str | Path, connector: str | None = None, samples: int = 0,
                         weights: ChoiceWeights | None = None, seed: int = 0,
-                        rescue: Sequence[tuple[int, float]] = (), margin_m: float = 0.0,
+                        rescue: Sequence[RescueRound] = (), margin_m: float = 0.0,
                         action: str = "mean", rescue_clearance_m: float = 0.0) -> "NeuralParkerPlanner":
         """Rebuild the network and env config stored in a checkpoint (CheckpointError on a bad file).
 

@@ -6,7 +6,8 @@ runs out of arcs, and among several successful rollouts some keep more distance 
 ``SampledRollouts`` runs ``n`` stochastic rollouts from one start in one batched environment (``BatchCore``, one
 compiled step for all of them), each arc drawn as ``clip(μ(o) + σ ⊙ ε, −1, 1)`` with ``μ`` the compiled mean
 action, ``σ = exp(log_std)`` the policy's learned standard deviation and ``ε ~ N(0, I)`` from a generator seeded
-per call, so the same query always gives the same plans. ``choose`` keeps the plans the tracker can steer and
+per call, so the same query always gives the same plans; with ``first_arc='uniform'`` each rollout's first arc is
+drawn uniformly over the action box ``[−1, 1]²`` instead (`FIRST_ARCS`). ``choose`` keeps the plans the tracker can steer and
 among them takes the lowest cost: an estimate of the drive time (as a length), a cost per reversal, a cost for
 clearance below a wanted safety margin (the largest margin of a ladder under which the whole sampled path keeps
 the vehicle rectangle inflated by it off every obstacle, `VehicleSpec.inflated`) and one for a terminal heading
@@ -57,16 +58,24 @@ def end_reason(core: BatchCore, row: int) -> str:
     return "collision" if core.R[row, K.R_COLLISION] > 0 else "timeout"
 
 
+FIRST_ARCS = ("policy", "uniform")
+"""How a ``SampledRollouts`` round draws each rollout's first arc: from the policy like every later arc, or
+uniformly over the whole action box (a start the policy steers into a wall still gets every first arc tried)."""
+
+
 class SampledRollouts:
     """``n`` stochastic rollouts of a policy from one start, batched (module docstring)."""
 
-    def __init__(self, actor, std: np.ndarray, config: EnvConfig, n: int, seed: int = 0):
+    def __init__(self, actor, std: np.ndarray, config: EnvConfig, n: int, seed: int = 0, first_arc: str = "policy"):
         if int(n) < 1:
             raise ValueError(f"SampledRollouts: n must be >= 1 rollout, got {n!r}")
+        if first_arc not in FIRST_ARCS:
+            raise ValueError(f"SampledRollouts: first_arc must be one of {FIRST_ARCS}, got {first_arc!r}")
         std = np.asarray(std, np.float64)
         if std.shape != (2,) or not np.all(np.isfinite(std)) or np.any(std < 0):
             raise ValueError(f"SampledRollouts: std must be two finite numbers >= 0, got {std.tolist()}")
         self.actor, self.std, self.config, self.n, self.seed = actor, std, config, int(n), int(seed)
+        self.first_arc = first_arc
         self._cores: weakref.WeakKeyDictionary[Scene, BatchCore] = weakref.WeakKeyDictionary()
 
     def _core(self, scene: Scene) -> BatchCore:
@@ -89,10 +98,15 @@ class SampledRollouts:
         plans: list[Plan | None] = [None] * self.n
         alive = np.ones(self.n, bool)
         actions = np.zeros((self.n, 2))
+        uniform_next = self.first_arc == "uniform"
         while alive.any():
             live = np.flatnonzero(alive)
-            noise = rng.standard_normal((len(live), 2)) * self.std
-            actions[live] = np.clip(self.actor.batch(core.obs[live]) + noise, -1.0, 1.0)
+            if uniform_next:
+                actions[live] = rng.uniform(-1.0, 1.0, (len(live), 2))
+                uniform_next = False
+            else:
+                noise = rng.standard_normal((len(live), 2)) * self.std
+                actions[live] = np.clip(self.actor.batch(core.obs[live]) + noise, -1.0, 1.0)
             actions[~alive] = 0.0
             core.step(actions)
             for row in live:

@@ -1,12 +1,13 @@
 """experiments.closed_loop: two site clips end to end, headless, with Hybrid A* and an untrained site policy."""
 
+import argparse
 import csv
 import json
 
 import pytest
 import torch
 
-from experiments.closed_loop import PlannerSettings, build_planners, main
+from experiments.closed_loop import PlannerSettings, _rescue_round, _rescue_text, build_planners, main
 from np_policy.checkpoint import save_checkpoint
 from np_policy.network import ActorCritic
 from np_policy.train import TrainConfig, benchmark_defaults
@@ -84,23 +85,28 @@ def test_two_workers_give_the_records_of_one(tmp_path, site_checkpoint):
 def test_footprint_samples_and_connector_reach_the_planner_and_the_config(tmp_path):
     out = tmp_path / "run"
     main(["--clips", "--clip-names", KNOWN_FEASIBLE, "--planners", "neuralparker_footprint", "--no-render",
-          "--footprint-samples", "4", "--footprint-rescue", "8:2", "--out", str(out)])
+          "--footprint-samples", "4", "--footprint-rescue", "8:2", "6:1:uniform", "--out", str(out)])
     config = json.loads((out / "config.json").read_text())
     assert config["footprint_samples"] == 4 and config["footprint_connector"] == "centred"
-    assert config["footprint_rescue"] == [[8, 2.0]]
+    assert config["footprint_rescue"] == [[8, 2.0, "policy"], [6, 1.0, "uniform"]]
     table = (out / "table.md").read_text()
     assert "best of its mean rollout and 4 sampled rollouts" in table and "terminal connector: centred" in table
-    assert ("When none of them succeeds or the best keeps less than 0.2 m clearance it samples 8 at 2 σ "
-            "(--footprint-rescue)." in table)
+    assert ("When none of them succeeds or the best keeps less than 0.2 m clearance it samples 8 at 2 σ, then 6 "
+            "at 1 σ after a uniform first arc (--footprint-rescue)." in table)
     assert config["footprint_rescue_clearance_m"] == 0.2
     default = build_planners(["neuralparker_footprint"], PlannerSettings())["neuralparker_footprint"]
-    assert [r.n for r in default.rescue] == [128, 128] and default.rescue_clearance_m == 0.2
+    assert [(r.n, r.first_arc) for r in default.rescue] == [(128, "policy"), (128, "policy"), (128, "uniform")]
+    assert default.rescue_clearance_m == 0.2
     off = build_planners(["neuralparker_footprint"], PlannerSettings(footprint_rescue_clearance_m=0.0))
     assert off["neuralparker_footprint"].rescue_clearance_m == 0.0
-    for rounds, scale in zip(default.rescue, (2.0, 3.0)):
+    for rounds, scale in zip(default.rescue, (2.0, 3.0, 1.0), strict=True):
         assert rounds.std == pytest.approx(scale * default.sampled.std)
     with pytest.raises(SystemExit):
         main(["--clips", "--footprint-rescue", "8", "--out", str(tmp_path / "bad")])
+    for bad in ("8:2:grid", "8:2:uniform:1", "0:1"):
+        with pytest.raises(argparse.ArgumentTypeError, match=f"expected N:SCALE\\[:FIRST\\] .*got '{bad}'"):
+            _rescue_round(bad)
+    assert _rescue_round("8:2") == (8, 2.0, "policy") and _rescue_text((8, 2.0, "policy")) == "8:2"
     settings = PlannerSettings(footprint_connector="fixed", footprint_samples=0)
     planner = build_planners(["neuralparker_footprint"], settings)["neuralparker_footprint"]
     assert planner.config.env.connector.headings_deg == (80.0, 90.0, 100.0)  # the checkpoint's, the paper's order

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from np_policy.planner import NeuralParkerPlanner
-from np_policy.sampling import ChoiceWeights, choose, clearance_level, cost_lower_bound, drive_length, plan_cost
+from np_policy.sampling import ChoiceWeights, SampledRollouts, choose, clearance_level, cost_lower_bound, drive_length, plan_cost
 from np_sim.clips import load_clips
 from np_sim.kinematics import arc_step
 from np_sim.plan import Plan
@@ -214,3 +214,31 @@ def test_rescue_rounds_also_run_for_a_plan_short_of_the_wanted_clearance(problem
         np.testing.assert_array_equal(chosen.arcs, expected.arcs)
     with pytest.raises(ValueError, match=r"rescue_clearance_m must be >= 0 m, got -0.1"):
         NeuralParkerPlanner.from_checkpoint(CHECKPOINT, rescue_clearance_m=-0.1)
+
+
+def test_a_uniform_first_arc_round_escapes_a_start_the_policy_steers_into_a_wall():
+    """eval-1000097's start is boxed in by the boundary and two objects: the policy's first arc (full left lock in
+    reverse) and all its sampled ones up to 3 σ collide, while some first arcs drawn uniformly over the action box
+    (the round's own seeded draws, scaled to κ_max and L_max) leave room for the policy to park."""
+    clip = next(c for c in load_clips("eval") if c.name == "eval-1000097")
+    scene, start = clip.frame_scene(0, pose=clip.start), np.asarray(clip.start, float)
+    policy_rounds = ((128, 2.0), (128, 3.0))
+    boxed = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=32, rescue=policy_rounds).plan(scene, start)
+    assert not boxed.success and boxed.reason == "collision"
+    planner = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=32, rescue=(*policy_rounds, (128, 1.0, "uniform")))
+    escape = planner.rescue[2]
+    assert (escape.n, escape.first_arc, escape.seed) == (128, "uniform", 3)
+    np.testing.assert_allclose(escape.std, planner.sampled.std)
+    plans = escape(scene, start)
+    env = planner.config.env
+    draws = np.random.default_rng(escape.seed).uniform(-1.0, 1.0, (128, 2))
+    np.testing.assert_allclose([p.arcs[0] for p in plans], draws * [env.vehicle.kappa_max, env.episode.max_length_m])
+    plan = planner.plan(scene, start)
+    assert plan.success and any(np.array_equal(plan.arcs, p.arcs) for p in plans if p.success)
+    assert [r.first_arc for r in planner.rescue] == ["policy", "policy", "uniform"]
+    with pytest.raises(ValueError, match=r"first arc must be one of \('policy', 'uniform'\), got \(8, 1.0, 'grid'\)"):
+        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, rescue=((8, 1.0, "grid"),))
+    with pytest.raises(ValueError, match=r"a rescue round is \(n, scale\[, first_arc\]\), got \(8,\)"):
+        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, rescue=((8,),))
+    with pytest.raises(ValueError, match=r"first_arc must be one of \('policy', 'uniform'\), got 'grid'"):
+        SampledRollouts(planner.actor, escape.std, env, 8, first_arc="grid")
