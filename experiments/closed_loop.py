@@ -437,17 +437,15 @@ def _rescue_text(spec: tuple[int, float, str]) -> str:
 
 def _rescue_round(text: str) -> tuple[int, float, str]:
     """``N:SCALE[:FIRST]`` → (N, SCALE, FIRST) for --footprint-rescue (FIRST 'policy' when left out)."""
+    from np_policy.planner import rescue_round
     from np_policy.sampling import FIRST_ARCS
 
     parts = text.split(":")
     try:
-        value = (int(parts[0]), float(parts[1]), parts[2] if len(parts) == 3 else "policy")
-    except (ValueError, IndexError):
-        value = (0, 0.0, "")
-    if len(parts) > 3 or value[0] < 1 or not value[1] > 0 or value[2] not in FIRST_ARCS:
+        return rescue_round((int(parts[0]), float(parts[1]), *parts[2:]))
+    except (ValueError, IndexError) as error:
         raise argparse.ArgumentTypeError(f"expected N:SCALE[:FIRST] with N >= 1 rollouts, SCALE > 0 and FIRST one "
-                                         f"of {', '.join(FIRST_ARCS)}, got {text!r}")
-    return value
+                                         f"of {', '.join(FIRST_ARCS)}, got {text!r}") from error
 
 
 def main(argv=None) -> dict[str, Any]:

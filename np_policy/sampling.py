@@ -7,11 +7,11 @@ runs out of arcs, and among several successful rollouts some keep more distance 
 compiled step for all of them), each arc drawn as ``clip(μ(o) + σ ⊙ ε, −1, 1)`` with ``μ`` the compiled mean
 action, ``σ = exp(log_std)`` the policy's learned standard deviation and ``ε ~ N(0, I)`` from a generator seeded
 per call, so the same query always gives the same plans; with ``first_arc='uniform'`` each rollout's first arc is
-drawn uniformly over the action box ``[−1, 1]²`` instead (`FIRST_ARCS`). ``choose`` keeps the plans the tracker can steer and
-among them takes the lowest cost: an estimate of the drive time (as a length), a cost per reversal, a cost for
-clearance below a wanted safety margin (the largest margin of a ladder under which the whole sampled path keeps
-the vehicle rectangle inflated by it off every obstacle, `VehicleSpec.inflated`) and one for a terminal heading
-near the edge of the parking tolerance. The weights were set on difficult training clips, never on the held-out
+drawn uniformly over the action box ``[−1, 1]²`` instead (`FIRST_ARCS`). ``choose`` keeps the plans the tracker
+can steer and among them takes the lowest cost: an estimate of the drive time (as a length), a cost per reversal,
+a cost for clearance below a wanted safety margin (the largest margin of a ladder under which the whole sampled
+path keeps the vehicle rectangle inflated by it off every obstacle, `VehicleSpec.inflated`) and one for a terminal
+heading near the edge of the parking tolerance. The weights were set on difficult training clips, never on the held-out
 ones.
 
 Arcs, checks, the heading gate, the connector and the arc budget are the env's own rules, as in the mean

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from np_policy.planner import NeuralParkerPlanner
-from np_policy.sampling import ChoiceWeights, SampledRollouts, choose, clearance_level, cost_lower_bound, drive_length, plan_cost
+from np_policy.sampling import (ChoiceWeights, SampledRollouts, choose, clearance_level, cost_lower_bound, drive_length,
+                                plan_cost)
 from np_sim.clips import load_clips
 from np_sim.kinematics import arc_step
 from np_sim.plan import Plan
@@ -225,7 +226,8 @@ def test_a_uniform_first_arc_round_escapes_a_start_the_policy_steers_into_a_wall
     policy_rounds = ((128, 2.0), (128, 3.0))
     boxed = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=32, rescue=policy_rounds).plan(scene, start)
     assert not boxed.success and boxed.reason == "collision"
-    planner = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=32, rescue=(*policy_rounds, (128, 1.0, "uniform")))
+    planner = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=32,
+                                                  rescue=(*policy_rounds, (128, 1.0, "uniform")))
     escape = planner.rescue[2]
     assert (escape.n, escape.first_arc, escape.seed) == (128, "uniform", 3)
     np.testing.assert_allclose(escape.std, planner.sampled.std)
