@@ -96,7 +96,8 @@ def main(argv=None) -> dict[str, Any]:
                         help="mean (default): the deterministic planner of the paper and SPEC; sample: one rollout "
                              "of sampled actions per start, as a Tianshou PPO policy acts at test time by default")
     parser.add_argument("--action-seed", type=int, default=0, metavar="S",
-                        help="noise seed of --action sample (with the start pose) and of --samples' rollouts (default 0)")
+                        help="noise seed of --action sample (with the start pose) and of --samples' rollouts "
+                             "(default 0)")
     parser.add_argument("--out", type=Path, help="run folder (default: results/evaluate/<timestamp>)")
     parser.add_argument("--limit", type=int, help="only the first N frozen episodes (smoke runs)")
     args = parser.parse_args(argv)
