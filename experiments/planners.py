@@ -32,7 +32,7 @@ METHODS = ("hybrid_astar", "np_guided_astar", "ompl_rrtstar", "neuralparker", "s
 LABELS = {"hybrid_astar": "Hybrid A*", "np_guided_astar": "NP-Guided A*", "ompl_rrtstar": "OMPL RRT*",
           "neuralparker": "NeuralParker", "staged_astar_np": "Hybrid A* → NP"}
 LEARNED = {"np_guided_astar", "neuralparker", "staged_astar_np"}
-DEFAULT_CHECKPOINT = Path("checkpoints/runs/factorial_np_seed0/best.pt")
+DEFAULT_CHECKPOINT = Path("checkpoints/factorial_np_seed0.pt")
 
 
 def build_planners(methods: list[str], checkpoint: Path | None, convention: str, ompl_seed: int) -> dict[str, Any]:

@@ -46,7 +46,7 @@ def make_planner(name: str, convention: str, checkpoint: Path | None):
 
         if checkpoint is None:
             raise ValueError("--planner neuralparker needs --checkpoint PATH (e.g. "
-                             "checkpoints/runs/factorial_np_seed0/best.pt)")
+                             "checkpoints/factorial_np_seed0.pt)")
         return NeuralParkerPlanner.from_checkpoint(checkpoint)
     raise ValueError(f"--planner: expected one of {PLANNERS}, got {name!r}")
 

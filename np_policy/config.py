@@ -54,6 +54,11 @@ class PPOConfig:
     """Passes over each collected batch."""
     batch_size: int = 8_192
     """Minibatch size; a short last minibatch is merged into the previous one (Tianshou ``merge_last``)."""
+    update_chunk: int = 1_024
+    """Samples per forward/backward pass inside a minibatch. The chunks' gradients are summed before the one
+    optimiser step, so the step is the whole-minibatch step up to float rounding; chunks that fit in cache make
+    the update faster on CPU (``python -m np_policy.bench_update --chunks``). Not a recipe parameter: runs trained
+    before this field existed passed the whole minibatch at once (set it to ``batch_size`` to replay them)."""
     buffer_size: int = 131_072
     """Replay-buffer capacity of the Tianshou recipe (≥ ``steps_per_collect``; on-policy data is cleared per collect)."""
     num_train_envs: int = 128
@@ -70,8 +75,8 @@ class PPOConfig:
     """ε added to the running return variance and to the minibatch advantage std."""
 
     def __post_init__(self) -> None:
-        for name in ("steps_per_epoch", "steps_per_collect", "repeats", "batch_size", "num_train_envs",
-                     "num_test_envs", "epochs"):
+        for name in ("steps_per_epoch", "steps_per_collect", "repeats", "batch_size", "update_chunk",
+                     "num_train_envs", "num_test_envs", "epochs"):
             if getattr(self, name) <= 0:
                 raise ConfigError(f"PPOConfig.{name}: expected a positive integer, got {getattr(self, name)!r}")
         if self.selection_episodes % self.num_test_envs:

@@ -25,8 +25,9 @@ heads are separate. The actor outputs the mean of a diagonal Gaussian over the n
 state-independent learned log-std; samples are clipped to [−1, 1] before the env (``clip_action``), log-probs are
 those of the unclipped sample (Tianshou ``action_bound_method="clip"``).
 
-Attention uses ``torch.nn.functional.scaled_dot_product_attention`` on a fused QKV projection: on this CPU it
-was faster than ``nn.MultiheadAttention`` at batch 8,192 (see ``np_policy/bench_update.py`` and the report).
+Attention runs on a fused QKV projection (``attention``): ``torch.nn.functional.scaled_dot_product_attention`` for
+the geometry tokens, where it was faster than ``nn.MultiheadAttention`` at batch 8,192, and broadcast products for
+the three fusion tokens, where it is not (see ``np_policy/bench_update.py`` and the README).
 Initialisation follows Tianshou's MuJoCo PPO example: orthogonal weights (gain √2), zero biases, the actor's last
 layer scaled by 0.01.
 """
@@ -70,9 +71,26 @@ class SelfAttentionBlock(nn.Module):
         """x: (B, S, dim) -> (B, S, dim)."""
         b, s, d = x.shape
         q, k, v = self.qkv(x).view(b, s, 3, self.heads, d // self.heads).permute(2, 0, 3, 1, 4)
-        attn = F.scaled_dot_product_attention(q, k, v)  # (B, H, S, d_h)
+        attn = attention(q, k, v)  # (B, H, S, d_h)
         x = self.norm1(x + self.out(attn.transpose(1, 2).reshape(b, s, d)))
         return self.norm2(x + self.ff(x))
+
+
+SHORT_SEQUENCE = 4
+"""Up to this many tokens ``attention`` uses broadcast products instead of ``scaled_dot_product_attention``."""
+
+
+def attention(q: torch.Tensor, k: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
+    """softmax(Q Kᵀ / √d_h) V over (B, H, S, d_h) tensors (paper §III-C, Attn; the attention of ``SelfAttentionBlock``).
+
+    For the three fusion tokens the broadcast form is 3× faster forward + backward on CPU than
+    ``scaled_dot_product_attention``, whose kernel is tuned for long sequences; for the 30 geometry tokens the
+    library kernel is the faster one (``np_policy/bench_update.py`` times the whole update).
+    """
+    if q.shape[-2] > SHORT_SEQUENCE:
+        return F.scaled_dot_product_attention(q, k, v)
+    scores = (q.unsqueeze(-2) * k.unsqueeze(-3)).sum(-1) * (1.0 / math.sqrt(q.shape[-1]))  # (B, H, S, S)
+    return (scores.softmax(-1).unsqueeze(-1) * v.unsqueeze(-3)).sum(-2)
 
 
 class SceneEncoder(nn.Module):

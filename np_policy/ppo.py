@@ -9,7 +9,7 @@ Phases of one update (the trainer calls them in this order):
    λ-returns, returns are divided by the running std, which is then updated with the raw returns (Tianshou
    ``reward_normalization``);
 3. ``ppo_update``: ``repeats`` passes of shuffled minibatches, per-minibatch advantage normalisation,
-   ``clipped_ppo_loss``, gradient-norm clipping.
+   ``clipped_ppo_loss`` (forward/backward in cache-sized chunks whose gradients add up), gradient-norm clipping.
 
 Losses follow Tianshou's ``PPOPolicy``: ``loss = L_clip + vf_coef · mean((R − V)²) − ent_coef · H``.
 """
@@ -126,41 +126,59 @@ def minibatch_indices(n: int, batch_size: int, generator: torch.Generator) -> li
     return chunks
 
 
+def accumulate_minibatch_gradient(model: nn.Module, batch: dict[str, torch.Tensor], idx: torch.Tensor,
+                                  config: PPOConfig) -> dict[str, float]:
+    """Add the gradient of one minibatch's PPO loss to ``.grad``; returns the minibatch's mean statistics.
+
+    loss = L_clip + vf_coef · L_V − ent_coef · H over the minibatch ``idx`` (advantages normalised over all of
+    it). The forward/backward passes run in chunks of ``config.update_chunk`` samples, each chunk's loss weighted
+    by its share of the minibatch, so the summed gradient is the whole-minibatch gradient up to float rounding.
+    """
+    adv = batch["advantages"][idx]
+    if config.norm_advantages:
+        adv = (adv - adv.mean()) / (adv.std() + config.norm_eps)
+    n = len(idx)
+    sums = dict.fromkeys(("policy_loss", "value_loss", "entropy", "approx_kl", "clip_fraction"), 0.0)
+    for start in range(0, n, config.update_chunk):
+        part = idx[start:start + config.update_chunk]
+        share = len(part) / n
+        log_prob, entropy, value = model.evaluate(batch["obs"][part], batch["actions"][part])
+        old_log_prob = batch["log_probs"][part]
+        policy_loss, value_loss, entropy_mean = clipped_ppo_loss(
+            log_prob, old_log_prob, adv[start:start + config.update_chunk], value, batch["returns"][part], entropy,
+            config.clip_coef, batch["values"][part] if config.value_clip else None)
+        loss = policy_loss + config.vf_coef * value_loss - config.ent_coef * entropy_mean
+        (loss * share).backward()
+        with torch.no_grad():
+            log_ratio = log_prob - old_log_prob
+            sums["approx_kl"] += share * ((log_ratio.exp() - 1) - log_ratio).mean().item()
+            sums["clip_fraction"] += ((log_ratio.exp() - 1).abs() > config.clip_coef).sum().item() / n
+        sums["policy_loss"] += share * policy_loss.item()
+        sums["value_loss"] += share * value_loss.item()
+        sums["entropy"] += share * entropy_mean.item()
+    return sums
+
+
 def ppo_update(model: nn.Module, optimizer: torch.optim.Optimizer, batch: dict[str, torch.Tensor],
                config: PPOConfig, generator: torch.Generator) -> dict[str, float]:
     """``config.repeats`` passes of shuffled minibatches over ``batch``; returns mean loss statistics.
 
     ``batch`` holds flat (M, ...) tensors: ``obs``, ``actions`` (unclipped), ``log_probs``, ``advantages``,
     ``returns`` (critic targets from ``compute_targets``) and, when ``config.value_clip``, ``values``.
-    ``model`` is an ``ActorCritic`` (``evaluate(obs, action) -> (log_prob, entropy, value)``).
+    ``model`` is an ``ActorCritic`` (``evaluate(obs, action) -> (log_prob, entropy, value)``). Per minibatch:
+    ``accumulate_minibatch_gradient``, gradient-norm clipping, one optimiser step.
     """
-    stats = {"policy_loss": [], "value_loss": [], "entropy": [], "approx_kl": [], "clip_fraction": [],
-             "grad_norm": []}
+    stats: dict[str, list[float]] = {"policy_loss": [], "value_loss": [], "entropy": [], "approx_kl": [],
+                                     "clip_fraction": [], "grad_norm": []}
     n = batch["obs"].shape[0]
     model.train()
     for _ in range(config.repeats):
         for idx in minibatch_indices(n, config.batch_size, generator):
-            adv = batch["advantages"][idx]
-            if config.norm_advantages:
-                adv = (adv - adv.mean()) / (adv.std() + config.norm_eps)
-            log_prob, entropy, value = model.evaluate(batch["obs"][idx], batch["actions"][idx])
-            old_log_prob = batch["log_probs"][idx]
-            policy_loss, value_loss, entropy_mean = clipped_ppo_loss(
-                log_prob, old_log_prob, adv, value, batch["returns"][idx], entropy, config.clip_coef,
-                batch["values"][idx] if config.value_clip else None)
-            loss = policy_loss + config.vf_coef * value_loss - config.ent_coef * entropy_mean
             optimizer.zero_grad()
-            loss.backward()
-            grad_norm = nn.utils.clip_grad_norm_(model.parameters(), config.max_grad_norm)
+            for key, value in accumulate_minibatch_gradient(model, batch, idx, config).items():
+                stats[key].append(value)
+            stats["grad_norm"].append(float(nn.utils.clip_grad_norm_(model.parameters(), config.max_grad_norm)))
             optimizer.step()
-            with torch.no_grad():
-                log_ratio = log_prob - old_log_prob
-                stats["approx_kl"].append(((log_ratio.exp() - 1) - log_ratio).mean().item())
-                stats["clip_fraction"].append(((log_ratio.exp() - 1).abs() > config.clip_coef).float().mean().item())
-            stats["policy_loss"].append(policy_loss.item())
-            stats["value_loss"].append(value_loss.item())
-            stats["entropy"].append(entropy_mean.item())
-            stats["grad_norm"].append(float(grad_norm))
     return {k: float(np.mean(v)) for k, v in stats.items()}
 
 

@@ -13,7 +13,7 @@ from np_sim.errors import CapacityError
 from np_sim.observation import obstacle_slots, observation_sections, observation_size
 from np_sim.scene import Scene
 from np_policy.config import NetworkConfig
-from np_policy.network import ActorCritic, SceneEncoder, clip_action
+from np_policy.network import SHORT_SEQUENCE, ActorCritic, SceneEncoder, attention, clip_action
 
 CONFIGS = {
     "default": ObservationConfig(),
@@ -104,3 +104,20 @@ def test_fusion_depth_and_heads_come_from_the_config():
     model = SceneEncoder(ObservationConfig(), NetworkConfig(fusion_depth=2))
     assert len(model.fusion) == 2 and model.fusion[0].heads == 4
     assert model.geometry_attention.heads == 1 and model.slot_position.shape == (30, 16)
+
+
+@pytest.mark.parametrize("shape", [(5, 4, 3, 32), (5, 1, SHORT_SEQUENCE, 16), (5, 1, 30, 16)])
+def test_attention_equals_the_library_kernel_values_and_gradients(shape):
+    """Both paths of ``attention`` (broadcast for short sequences, the library kernel otherwise) against
+    ``scaled_dot_product_attention`` and a hand softmax(QKᵀ/√d)V, in float64."""
+    g = torch.Generator().manual_seed(sum(shape))
+    q, k, v = (torch.randn(*shape, generator=g, dtype=torch.float64, requires_grad=True) for _ in range(3))
+    ours = attention(q, k, v)
+    library = torch.nn.functional.scaled_dot_product_attention(q, k, v)
+    by_hand = torch.softmax(q @ k.transpose(-2, -1) / math.sqrt(shape[-1]), dim=-1) @ v
+    torch.testing.assert_close(ours, library)
+    torch.testing.assert_close(ours, by_hand)
+    weights = torch.randn(*shape, generator=g, dtype=torch.float64)
+    grads = [torch.autograd.grad((out * weights).sum(), (q, k, v)) for out in (attention(q, k, v), by_hand)]
+    for ours_grad, hand_grad in zip(*grads):
+        torch.testing.assert_close(ours_grad, hand_grad)

@@ -13,8 +13,8 @@ from np_sim.errors import ConfigError
 from np_sim.observation import observation_size
 from np_policy.config import NetworkConfig, PPOConfig
 from np_policy.network import ActorCritic
-from np_policy.ppo import (RunningMeanStd, clipped_ppo_loss, compute_targets, gae, make_optimizer,
-                           minibatch_indices, ppo_update)
+from np_policy.ppo import (RunningMeanStd, accumulate_minibatch_gradient, clipped_ppo_loss, compute_targets, gae,
+                           make_optimizer, minibatch_indices, ppo_update)
 
 
 def tiny_rollout():
@@ -119,6 +119,40 @@ def test_same_seed_gives_the_same_update_on_cpu():
     state_c, _ = _update_once(1)
     assert not torch.equal(state_a["log_std"], state_c["log_std"]) or not torch.equal(
         state_a["actor.0.weight"], state_c["actor.0.weight"])
+
+
+def test_chunked_minibatch_gradient_equals_the_whole_minibatch_gradient():
+    """Chunks of 7 (uneven last chunk) against one pass over the 40-sample minibatch: same gradient, same stats
+    (in float64, so that the comparison is not float32 summation-order noise)."""
+    torch.manual_seed(3)
+    obs_config = ObservationConfig()
+    model = ActorCritic(obs_config, NetworkConfig()).double()
+    g = torch.Generator().manual_seed(3)
+    n = 40
+    obs = torch.randn(n, observation_size(obs_config), generator=g, dtype=torch.float64)
+    obs[:, 124 + 3 * 16: 124 + 320] = -1e4
+    batch = {"obs": obs}
+    batch["actions"], batch["log_probs"], batch["values"] = model.act(obs)
+    batch["log_probs"] = batch["log_probs"] + 0.3 * torch.randn(n, generator=g, dtype=torch.float64)  # clip some
+    batch["advantages"] = torch.randn(n, generator=g, dtype=torch.float64)
+    batch["returns"] = torch.randn(n, generator=g, dtype=torch.float64)
+    idx = torch.randperm(n, generator=g)
+    grads, stats = [], []
+    for chunk in (n, 7):
+        model.zero_grad()
+        config = PPOConfig(batch_size=n, update_chunk=chunk, value_clip=True)
+        stats.append(accumulate_minibatch_gradient(model, batch, idx, config))
+        grads.append([p.grad.clone() for p in model.parameters()])
+    for whole, chunked in zip(*grads):
+        torch.testing.assert_close(chunked, whole, rtol=1e-7, atol=1e-10)
+    for key in stats[0]:
+        assert stats[1][key] == pytest.approx(stats[0][key], rel=1e-9, abs=1e-12), key
+    assert 0.0 < stats[0]["clip_fraction"] < 1.0
+
+
+def test_update_chunk_must_be_positive():
+    with pytest.raises(ConfigError, match="PPOConfig.update_chunk"):
+        PPOConfig(update_chunk=0)
 
 
 def test_ppo_config_defaults_are_table_v():
