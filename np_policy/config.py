@@ -58,7 +58,7 @@ class PPOConfig:
     """Samples per forward/backward pass inside a minibatch. The chunks' gradients are summed before the one
     optimiser step, so the step is the whole-minibatch step up to float rounding; chunks that fit in cache make
     the update faster on CPU (``python -m np_policy.bench_update --chunks``). Not a recipe parameter: runs trained
-    before this field existed passed the whole minibatch at once (set it to ``batch_size`` to replay them)."""
+    before this field existed passed the whole minibatch at once."""
     buffer_size: int = 131_072
     """Replay-buffer capacity of the Tianshou recipe (≥ ``steps_per_collect``; on-policy data is cleared per collect)."""
     num_train_envs: int = 128
