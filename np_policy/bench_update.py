@@ -7,6 +7,12 @@ The update is timed once per ``--chunks`` value (``PPOConfig.update_chunk``: sam
 the batch size itself means one pass) and printed beside the budget the issue's goal leaves: 90 minutes for the
 240-epoch recipe's 240 × 80 minibatch updates is 281 ms per update even if collecting took no time.
 
+It then bounds the update from below: the floating-point work of one update (``torch.utils.flop_counter``), this
+machine's float32 matrix-product rate (a 2,048³ ``torch.mm``), and the time the update spends inside matrix
+products (``torch.profiler``), each scaled to the recipe's 19,200 updates. A wall-clock goal below the
+matrix-product time cannot be met by removing overhead; only fewer or cheaper FLOPs (network, recipe, precision)
+can meet it.
+
 Observations are synthetic flat vectors of the default layout (3 obstacles and 4 boundary segments used, the rest
 at the −1e4 sentinel); the timing does not depend on their values.
 """
@@ -19,6 +25,8 @@ import statistics
 import time
 
 import torch
+from torch.profiler import ProfilerActivity, profile
+from torch.utils.flop_counter import FlopCounterMode
 
 from np_sim.config import ObservationConfig
 from np_sim.observation import observation_sections, observation_size
@@ -28,9 +36,36 @@ from np_policy.ppo import make_optimizer, ppo_update
 
 
 _RECIPE = PPOConfig()
-UPDATE_BUDGET_MS = 90 * 60 * 1000 / (_RECIPE.epochs * _RECIPE.collects_per_epoch * _RECIPE.repeats
-                                     * (_RECIPE.steps_per_collect // _RECIPE.batch_size))
+RECIPE_UPDATES = (_RECIPE.epochs * _RECIPE.collects_per_epoch * _RECIPE.repeats
+                  * (_RECIPE.steps_per_collect // _RECIPE.batch_size))
+"""Minibatch updates in the 240-epoch recipe (240 epochs × 4 collects × 10 repeats × 2 minibatches = 19,200)."""
+UPDATE_BUDGET_MS = 90 * 60 * 1000 / RECIPE_UPDATES
 """The issue's 90-minute goal spread over the recipe's minibatch updates (281 ms each)."""
+MATRIX_PRODUCTS = ("aten::mm", "aten::addmm", "aten::bmm", "aten::baddbmm")
+
+
+def sgemm_gflops(size: int = 2048, repeats: int = 5) -> float:
+    """This machine's float32 matrix-product rate: GFLOP/s of a ``size``³ ``torch.mm`` (best of ``repeats``)."""
+    a, b = torch.randn(size, size), torch.randn(size, size)
+    a @ b
+    best = min(_seconds(lambda: a @ b) for _ in range(repeats))
+    return 2 * size**3 / best / 1e9
+
+
+def _seconds(fn) -> float:
+    t0 = time.perf_counter()
+    fn()
+    return time.perf_counter() - t0
+
+
+def update_work(model, optimizer, data, config: PPOConfig, generator: torch.Generator) -> tuple[float, float]:
+    """(GFLOP of one minibatch update, ms it spends inside matrix products) — the update's lower bound."""
+    with FlopCounterMode(display=False) as flops:
+        ppo_update(model, optimizer, data, config, generator)
+    with profile(activities=[ProfilerActivity.CPU]) as prof:
+        ppo_update(model, optimizer, data, config, generator)
+    matmul_us = sum(e.self_cpu_time_total for e in prof.key_averages() if e.key in MATRIX_PRODUCTS)
+    return flops.get_total_flops() / 1e9, matmul_us / 1000
 
 
 def synthetic_obs(config: ObservationConfig, batch: int, generator: torch.Generator) -> torch.Tensor:
@@ -68,6 +103,9 @@ def main(batch: int = 8192, forward_batch: int = 128, repeats: int = 5, threads:
             ppo_update(model, optimizer, data, config, g)
             update_s.append(time.perf_counter() - t0)
         update_ms[min(chunk, batch)] = 1000 * statistics.median(update_s)
+    recipe_chunk = PPOConfig(batch_size=batch, repeats=1, update_chunk=min(_RECIPE.update_chunk, batch))
+    update_gflop, matmul_ms = update_work(model, optimizer, data, recipe_chunk, g)
+    peak = sgemm_gflops()
 
     small = synthetic_obs(obs_config, forward_batch, g)
     model.act(small)
@@ -83,6 +121,11 @@ def main(batch: int = 8192, forward_batch: int = 128, repeats: int = 5, threads:
         "update_batch": batch,
         "update_ms_by_chunk": update_ms,
         "update_budget_ms": UPDATE_BUDGET_MS,
+        "update_gflop": update_gflop,
+        "sgemm_gflops": peak,
+        "update_at_sgemm_rate_ms": 1000 * update_gflop / peak,
+        "update_matmul_ms": matmul_ms,
+        "recipe_updates": RECIPE_UPDATES,
         "forward_batch": forward_batch,
         "forward_act_ms": 1000 * forward_s / n_calls,
         "forward_samples_per_s": forward_batch * n_calls / forward_s,
@@ -108,5 +151,12 @@ if __name__ == "__main__":
             print(f"PPO minibatch update, batch {out['update_batch']} in chunks of {chunk}: {ms:.0f} ms "
                   f"(budget for the 90-min recipe: {out['update_budget_ms']:.0f} ms; {out['params']} params, "
                   f"{out['torch_threads']} threads)")
+        to_min = out["recipe_updates"] / 60_000
+        print(f"lower bound at chunk {_RECIPE.update_chunk}: {out['update_gflop']:.1f} GFLOP per update; at this "
+              f"machine's sgemm rate ({out['sgemm_gflops']:.0f} GFLOP/s, 2048³) {out['update_at_sgemm_rate_ms']:.0f} "
+              f"ms; measured inside matrix products {out['update_matmul_ms']:.0f} ms. Over the recipe's "
+              f"{out['recipe_updates']:,} updates: >= {out['update_at_sgemm_rate_ms'] * to_min:.0f} min at the sgemm "
+              f"rate, {out['update_matmul_ms'] * to_min:.0f} min in matrix products, before any env step "
+              f"(goal: 90 min in all)")
         print(f"forward act(), batch {out['forward_batch']}: {out['forward_act_ms']:.2f} ms/call, "
               f"{out['forward_samples_per_s']:.0f} samples/s")

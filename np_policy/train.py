@@ -7,7 +7,8 @@ and the in-loop Hermite ensemble, then per epoch collect 16,384 transitions at a
 until at least 60,000 steps are in, after each collect run 10 shuffled passes of minibatches of 8,192
 (Tianshou's on-policy trainer semantics, SPEC §6), then score 32 full-range training-distribution episodes
 with the deterministic policy for checkpoint selection (never a frozen evaluation episode). Every epoch appends
-a line to ``metrics.jsonl`` and redraws ``curves.png``; ``best.pt`` holds the selected policy; ``snapshot.pt``
+a line to ``metrics.jsonl`` (statistics, and its wall-clock split into ``collect_s``, ``update_s`` and
+``selection_s``) and redraws ``curves.png``; ``best.pt`` holds the selected policy; ``snapshot.pt``
 (every 20 epochs and at the end) holds everything needed to resume exactly — on CPU a resumed run gives the
 same curve as an uninterrupted one.
 """
@@ -419,16 +420,23 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
         t0 = time.perf_counter()
         steps0 = trainer.env_steps
         returns, successes, stats = [], [], {}
+        seconds = dict.fromkeys(("collect_s", "update_s", "selection_s"), 0.0)
         while trainer.env_steps - steps0 < ppo.steps_per_epoch:
+            t_phase = time.perf_counter()
             roll = trainer.collect()
             returns += roll["ended_returns"]
             successes += roll["ended_success"]
+            t_update = time.perf_counter()
             stats = trainer.update(roll)
+            seconds["collect_s"] += t_update - t_phase
+            seconds["update_s"] += time.perf_counter() - t_update
         trainer.epoch += 1
+        t_phase = time.perf_counter()
         selection, selection_success = trainer.selection_reward()
+        seconds["selection_s"] = time.perf_counter() - t_phase
         elapsed = time.perf_counter() - t0
         row = {"epoch": trainer.epoch, "env_steps": trainer.env_steps,
-               "steps_per_s": (trainer.env_steps - steps0) / elapsed,
+               "steps_per_s": (trainer.env_steps - steps0) / elapsed, "epoch_s": elapsed, **seconds,
                "train_return": float(np.mean(returns)) if returns else float("nan"),
                "train_success": float(np.mean(successes)) if successes else float("nan"),
                "episodes": len(returns), "curriculum_fraction": trainer.sampler.fraction,

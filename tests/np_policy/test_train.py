@@ -18,7 +18,8 @@ TINY = {"benchmark": "examples", "seed": 3, "curriculum_pool": 32,
 def _rows(path):
     rows = [json.loads(line) for line in (path / "metrics.jsonl").read_text().splitlines()]
     for r in rows:
-        r.pop("steps_per_s")
+        for key in ("steps_per_s", "epoch_s", "collect_s", "update_s", "selection_s"):
+            r.pop(key)
     return rows
 
 
@@ -56,6 +57,9 @@ def test_cli_writes_metrics_curves_and_checkpoints(tmp_path):
     cfg.write_text(json.dumps({k: v for k, v in TINY.items() if k not in ("benchmark", "seed")}))
     rows = main(["--benchmark", "examples", "--config", str(cfg), "--epochs", "2", "--out", str(tmp_path / "run")])
     assert [r["epoch"] for r in rows] == [1, 2]
+    for r in rows:  # the epoch's wall-clock split into its phases
+        phases = r["collect_s"] + r["update_s"] + r["selection_s"]
+        assert min(r["collect_s"], r["update_s"], r["selection_s"]) > 0 and phases <= r["epoch_s"] < phases + 0.5
     for name in ("metrics.jsonl", "curves.png", "best.pt", "snapshot.pt", "config.json"):
         assert (tmp_path / "run" / name).stat().st_size > 0
     best = load_checkpoint(tmp_path / "run" / "best.pt", expected_config=TrainConfig.from_dict(TINY | {"seed": 0}).to_dict())
