@@ -10,7 +10,8 @@ class SceneError(NPSimError, ValueError):
 
 
 class CapacityError(SceneError):
-    """A scene exceeds the object or boundary capacity of the observation config it is used with."""
+    """A scene exceeds a capacity of what it is used with: the observation's object or boundary limits, or a
+    planner's memory bound (``HybridAStarConfig.max_lattice_bytes``)."""
 
 
 class ConfigError(NPSimError, ValueError):

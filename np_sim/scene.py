@@ -6,17 +6,25 @@ A scene is stored in the world frame as one JSON object::
       "version": 1,
       "name": "reverse_bay",
       "tags": {"benchmark": "factorial", "split": "test"},
-      "boundary": [[x, y], ...],                 # simple polygon, either orientation, each vertex once
-      "obstacles": [{"polygon": [[x, y], ...]},  # simple polygon, >= 3 vertices
+      "boundary": [[x, y], ...],                 # simple polygon, either orientation
+      "obstacles": [{"polygon": [[x, y], ...]},  # simple polygon, >= 3 distinct vertices; may cross the boundary
                     {"circle": [cx, cy, r]}],    # r > 0
       "target": [x, y, theta],                   # reference-point pose (rear-axle centre), radians
-      "start_region": [[x, y], ...]              # optional simple polygon; absent = whole free space
+      "start_region": [[x, y], ...]              # optional simple polygon inside the boundary; absent = whole lot
     }
 
-Loading validates everything and fixes nothing: every problem raises `SceneError` with the source (file path or
-``"<dict>"``), the field path (``obstacles[3].polygon[2]``) and what was expected against what came. The format has
-no object or vertex limit; the NeuralParker observation limits live in `SceneCapacity` and are enforced only when a
-capacity is passed (`CapacityError`).
+Polygons (boundary, obstacle polygons, start region) describe a closed ring. Exact repeats are the same ring and
+are dropped when a scene is built: a closing vertex equal to the first (the GeoJSON convention) and consecutive
+equal vertices. Obstacles may cross or lie beyond the boundary (a real lot cut to a region of interest). The start
+region must lie inside the boundary (touching it is allowed) and must not be wholly covered by obstacles: some of
+its area must be free, with circles counted as their circumscribed 64-gon. Whether a whole footprint fits there is
+the benchmark validity check's question (`np_sim.benchmarks.validity`), not the format's.
+
+Loading validates everything and fixes nothing else: every problem raises `SceneError` with the source (file path
+or ``"<dict>"``), the field path (``obstacles[3].polygon[2]``) and what was expected against what came; an
+unreadable, non-UTF-8, non-JSON or too deeply nested file is a `SceneError` too. The format has no object or vertex
+limit; the NeuralParker observation limits live in `SceneCapacity` and are enforced only when a capacity is passed
+(`CapacityError`).
 """
 
 from __future__ import annotations
@@ -24,6 +32,7 @@ from __future__ import annotations
 import json
 import math
 import re
+import reprlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -32,6 +41,7 @@ import numpy as np
 import shapely
 from shapely.geometry import MultiPoint, Point
 from shapely.geometry import Polygon as ShapelyPolygon
+from shapely.ops import unary_union
 
 from np_sim.errors import CapacityError, SceneError
 from np_sim.vehicle import VehicleSpec
@@ -40,11 +50,21 @@ SCENE_FORMAT_VERSION = 1
 """The only scene JSON version this module reads and writes."""
 
 
-def _frozen_array(values, what: str) -> np.ndarray:
-    """Copy ``values`` to a read-only (n, 2) float64 array; SceneError naming ``what`` if the shape is wrong."""
+def _frozen_ring(values, what: str) -> np.ndarray:
+    """Copy polygon ``values`` to a read-only (n, 2) float64 array without exact repeats; SceneError on bad shape.
+
+    A vertex equal to the one kept before it is dropped, and so are closing vertices equal to the first: the
+    ring they describe is the same.
+    """
     array = np.array(values, dtype=np.float64)
     if array.ndim != 2 or array.shape[1] != 2:
         raise SceneError(f"{what}: expected an array of shape (n, 2), got shape {array.shape}")
+    if len(array) > 1:
+        keep = np.ones(len(array), bool)
+        keep[1:] = np.any(array[1:] != array[:-1], axis=1)
+        array = array[keep]
+        while len(array) > 1 and np.array_equal(array[-1], array[0]):
+            array = array[:-1]
     array.flags.writeable = False
     return array
 
@@ -57,13 +77,13 @@ def _circle_points(center: np.ndarray, radius: float, n: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class PolygonObstacle:
-    """A polygonal obstacle given by its vertices in the world frame, either orientation, each vertex once."""
+    """A polygonal obstacle given by its vertices in the world frame, either orientation; exact repeats dropped."""
 
     vertices: np.ndarray
-    """(k, 2) float64 world-frame vertices (m), k >= 3, read-only."""
+    """(k, 2) float64 world-frame vertices (m), k >= 3, read-only, no vertex equal to the next (ring closes)."""
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "vertices", _frozen_array(self.vertices, "PolygonObstacle.vertices"))
+        object.__setattr__(self, "vertices", _frozen_ring(self.vertices, "PolygonObstacle.vertices"))
 
 
 @dataclass(frozen=True)
@@ -114,11 +134,14 @@ class Scene:
     """One parking scene in the world frame (SPEC §4).
 
     Construct with `Scene.from_dict` or `Scene.load`, which validate; direct construction only normalises the
-    arrays (float64, read-only) and checks their shapes — call `validate` on scenes built in code.
+    arrays (float64, read-only, exact repeats and closing vertices of polygons dropped) and checks their shapes —
+    call `validate` on scenes built in code. Validity rules are in the module docstring: simple polygons, the
+    start region inside the boundary with free area, the target footprint strictly inside and obstacle-free;
+    obstacles may cross the boundary.
     """
 
     boundary: np.ndarray
-    """(B, 2) float64 simple polygon (m), either orientation, each vertex once (no repeated closing vertex)."""
+    """(B, 2) float64 simple polygon (m), either orientation, no vertex equal to the next (the ring closes)."""
     obstacles: tuple[Obstacle, ...]
     """Obstacles in scene order (the order the observation and ray casting use)."""
     target: np.ndarray
@@ -133,14 +156,14 @@ class Scene:
     """Scene format version; only `SCENE_FORMAT_VERSION` exists."""
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "boundary", _frozen_array(self.boundary, "Scene.boundary"))
+        object.__setattr__(self, "boundary", _frozen_ring(self.boundary, "Scene.boundary"))
         target = np.array(self.target, dtype=np.float64)
         if target.shape != (3,):
             raise SceneError(f"Scene.target: expected shape (3,), got {target.shape}")
         target.flags.writeable = False
         object.__setattr__(self, "target", target)
         if self.start_region is not None:
-            object.__setattr__(self, "start_region", _frozen_array(self.start_region, "Scene.start_region"))
+            object.__setattr__(self, "start_region", _frozen_ring(self.start_region, "Scene.start_region"))
         obstacles = tuple(self.obstacles)
         for index, obstacle in enumerate(obstacles):
             if not isinstance(obstacle, (PolygonObstacle, CircleObstacle)):
@@ -206,16 +229,16 @@ class Scene:
         vehicle: VehicleSpec | None = None,
         capacity: SceneCapacity | None = None,
     ) -> Scene:
-        """Read and validate a scene JSON file; errors name the file (see `from_dict` for the arguments)."""
+        """Read and validate a scene JSON file; errors name the file (see `from_dict` for the arguments).
+
+        Raises
+        ------
+        SceneError
+            Also when the file cannot be read (missing, a directory, no permission), is not UTF-8, is not JSON or
+            nests too deeply to parse.
+        """
         source = str(path)
-        text = Path(path).read_text(encoding="utf-8")
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as error:
-            raise SceneError(
-                f"{source}: invalid JSON at line {error.lineno}, column {error.colno}: {error.msg}"
-            ) from None
-        return cls.from_dict(data, source=source, vehicle=vehicle, capacity=capacity)
+        return cls.from_dict(read_json(path), source=source, vehicle=vehicle, capacity=capacity)
 
     def save(self, path: str | Path) -> None:
         """Write the scene as JSON (indent 2, fixed key order, one point per line) to ``path``."""
@@ -255,7 +278,7 @@ class Scene:
                 if obstacle.radius <= 0.0:
                     raise SceneError(f"{source}: {where}[2]: expected a radius > 0, got {obstacle.radius!r}")
         if self.start_region is not None:
-            _check_polygon(self.start_region, source, "start_region")
+            self._check_start_region(boundary, _check_polygon(self.start_region, source, "start_region"), source)
         if capacity is not None:
             self.check_capacity(capacity, source=source)
         self._check_target(boundary, vehicle if vehicle is not None else VehicleSpec(), source)
@@ -281,6 +304,22 @@ class Scene:
                     f"{source}: target: the vehicle footprint at ({pose}) must be disjoint from every obstacle, "
                     f"but it touches or overlaps obstacles[{index}] ({kind})"
                 )
+
+    def _check_start_region(self, boundary: ShapelyPolygon, region: ShapelyPolygon, source: str) -> None:
+        """SceneError unless ``region`` lies inside ``boundary`` (touching allowed) and has area free of obstacles."""
+        if not boundary.covers(region):
+            outside = region.difference(boundary).representative_point()
+            raise SceneError(
+                f"{source}: start_region: expected a polygon inside the boundary, but it leaves the boundary "
+                f"(e.g. at ({outside.x:g}, {outside.y:g}))"
+            )
+        shapes = [_obstacle_shape(obstacle) for obstacle in self.obstacles]
+        if shapes and region.difference(unary_union(shapes)).area <= 0.0:
+            covering = [f"obstacles[{i}]" for i, shape in enumerate(shapes) if shape.intersects(region)]
+            raise SceneError(
+                f"{source}: start_region: expected some area free of obstacles, but it lies wholly inside "
+                f"{', '.join(covering)} (no start can be drawn there)"
+            )
 
     def check_capacity(self, capacity: SceneCapacity, *, source: str = "<scene>") -> None:
         """Raise `CapacityError` naming the limit and the count if the scene exceeds ``capacity`` (never truncates)."""
@@ -332,9 +371,13 @@ def _type_name(value: Any) -> str:
     return "null" if value is None else names.get(type(value), type(value).__name__)
 
 
+_SHORT_REPR = reprlib.Repr()
+"""repr with bounded depth and length (reprlib's defaults), safe on deeply nested or huge values."""
+
+
 def _describe(value: Any) -> str:
     """Short ``type value`` description of what came, for error messages."""
-    text = repr(value)
+    text = _SHORT_REPR.repr(value)
     if len(text) > 60:
         text = text[:57] + "..."
     return f"{_type_name(value)} {text}"
@@ -353,9 +396,16 @@ def _number(value: Any, source: str, where: str) -> float:
         value = value.item()
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise SceneError(f"{source}: {where}: expected a number, got {_describe(value)}")
-    if not math.isfinite(value):
+    try:
+        number = float(value)
+    except OverflowError:
+        raise SceneError(
+            f"{source}: {where}: expected a finite number, got an integer of {len(str(abs(value)))} digits "
+            "(beyond the float range)"
+        ) from None
+    if not math.isfinite(number):
         raise SceneError(f"{source}: {where}: expected a finite number, got {value!r}")
-    return float(value)
+    return number
 
 
 def _numbers(value: Any, count: int, source: str, where: str, what: str) -> list[float]:
@@ -448,25 +498,15 @@ _LOCATION = re.compile(r"\[\s*([-+0-9.eE]+)\s+([-+0-9.eE]+)\s*\]")
 
 
 def _check_polygon(vertices: np.ndarray, source: str, where: str) -> ShapelyPolygon:
-    """SceneError unless ``vertices`` form a simple polygon with >= 3 distinct consecutive vertices and area > 0."""
+    """SceneError unless ``vertices`` (exact repeats already dropped) form a simple polygon of area > 0."""
     n = len(vertices)
     if n < 3:
-        raise SceneError(f"{source}: {where}: expected a polygon with at least 3 vertices, got {n}")
+        raise SceneError(
+            f"{source}: {where}: expected a polygon with at least 3 distinct vertices, got {n} "
+            "(exact repeats and a closing vertex equal to the first count once)"
+        )
     if not np.all(np.isfinite(vertices)):
         raise SceneError(f"{source}: {where}: expected finite coordinates")
-    for i in range(n):
-        j = (i + 1) % n
-        if np.array_equal(vertices[i], vertices[j]):
-            point = f"({vertices[i][0]:g}, {vertices[i][1]:g})"
-            if j == 0:
-                raise SceneError(
-                    f"{source}: {where}[{i}]: degenerate polygon: the last vertex {point} repeats {where}[0]; "
-                    "list each vertex once (the ring closes itself)"
-                )
-            raise SceneError(
-                f"{source}: {where}[{j}]: degenerate polygon: vertex {point} repeats {where}[{i}]; "
-                "expected consecutive vertices to differ"
-            )
     if MultiPoint(vertices).convex_hull.area == 0.0:
         raise SceneError(f"{source}: {where}: degenerate polygon: zero area (all {n} vertices are collinear)")
     polygon = ShapelyPolygon(vertices)
@@ -478,6 +518,43 @@ def _check_polygon(vertices: np.ndarray, source: str, where: str) -> ShapelyPoly
             f"{source}: {where}: expected a simple polygon, but it self-intersects{at} (shapely: {reason})"
         )
     return polygon
+
+
+def _obstacle_shape(obstacle: Obstacle) -> ShapelyPolygon:
+    """The obstacle as a shapely polygon; a circle as its circumscribed 64-gon (covers the whole disc)."""
+    if isinstance(obstacle, PolygonObstacle):
+        return ShapelyPolygon(obstacle.vertices)
+    circumradius = obstacle.radius / math.cos(math.pi / 64)
+    return ShapelyPolygon(_circle_points(obstacle.center, circumradius, 64))
+
+
+def read_json(path: str | Path) -> Any:
+    """Parse the JSON file at ``path``; every failure (unreadable, not UTF-8, not JSON, too deep) is a SceneError.
+
+    The message opens with the path and says what went wrong, for the user to fix the file or the path.
+    """
+    source = str(path)
+    try:
+        raw = Path(path).read_bytes()
+    except OSError as error:
+        reason = error.strerror or type(error).__name__
+        raise SceneError(f"{source}: cannot read the scene file: {reason}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise SceneError(
+            f"{source}: expected UTF-8 text, got byte 0x{raw[error.start]:02x} at offset {error.start}"
+        ) from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as error:
+        raise SceneError(
+            f"{source}: invalid JSON at line {error.lineno}, column {error.colno}: {error.msg}"
+        ) from None
+    except RecursionError:
+        raise SceneError(f"{source}: invalid JSON: nested too deeply to parse") from None
+    except ValueError as error:  # e.g. an integer literal beyond Python's digit limit
+        raise SceneError(f"{source}: invalid JSON: {error}") from None
 
 
 def _obstacle_to_dict(obstacle: Obstacle) -> dict:

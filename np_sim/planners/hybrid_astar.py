@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from np_sim.config import Convention
-from np_sim.errors import ConfigError
+from np_sim.errors import CapacityError, ConfigError
 from np_sim.kernels.collision import poses_valid
 from np_sim.kernels.reeds_shepp import MAX_PIECES
 from np_sim.kinematics import arc_step, wrap_angle
@@ -81,6 +81,8 @@ class HybridAStarConfig:
     """NP-Guided A*: weight on the node's distance to the guide path (m per m); used only when a guide is given."""
     guide_cap_m: float = 3.0
     """NP-Guided A*: the distance term saturates here (m), so a wrong guide costs a bounded detour of the search."""
+    max_lattice_bytes: int = 1 << 30
+    """Most memory (bytes) one scene's lattice and heuristic grid may take; a larger scene is refused up front."""
 
     def __post_init__(self) -> None:
         positive = ("xy_resolution_m", "step_m", "reverse_factor", "heuristic_weight", "grid_cell_m", "check_spacing_m",
@@ -94,7 +96,7 @@ class HybridAStarConfig:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ConfigError(f"HybridAStarConfig.{name}: expected a finite number >= 0, got {value!r}")
-        for name in ("heading_bins", "analytic_every", "max_expanded", "chunk_expansions"):
+        for name in ("heading_bins", "analytic_every", "max_expanded", "chunk_expansions", "max_lattice_bytes"):
             value = getattr(self, name)
             if not (isinstance(value, int) and value >= 1):
                 raise ConfigError(f"HybridAStarConfig.{name}: expected an integer >= 1, got {value!r}")
@@ -174,6 +176,16 @@ class HybridAStar:
             geo = packed_scene(scene).geometry
             b = np.asarray(scene.boundary, float)
             lo, hi = b.min(axis=0), b.max(axis=0)
+            # lattice: int64 stamp, float64 g, int64 closed per (x, y, θ) cell; heuristic grid: 145 B per cell
+            cells = [int(extent / c.xy_resolution_m) + 1 for extent in hi - lo]
+            grid_cells = [int(extent / c.grid_cell_m) + 1 for extent in hi - lo]
+            need = 24 * cells[0] * cells[1] * c.heading_bins + 145 * grid_cells[0] * grid_cells[1]
+            if need > c.max_lattice_bytes:
+                raise CapacityError(
+                    f"{scene.name or '<scene>'}: boundary: a {hi[0] - lo[0]:g} x {hi[1] - lo[1]:g} m extent needs "
+                    f"{need / 2**20:,.0f} MiB of Hybrid A* lattice and heuristic grid, over "
+                    f"HybridAStarConfig.max_lattice_bytes = {c.max_lattice_bytes / 2**20:,.0f} MiB; "
+                    "raise the bound or coarsen xy_resolution_m / heading_bins / grid_cell_m")
             n = np.array([int((hi[0] - lo[0]) / c.xy_resolution_m) + 1, int((hi[1] - lo[1]) / c.xy_resolution_m) + 1,
                           c.heading_bins], np.int64)
             maps = _SceneMaps(geo, holonomic_grid(geo, b, scene.target[:2], c.grid_cell_m),
