@@ -23,6 +23,7 @@ import numpy as np
 
 from np_policy.planner import NeuralParkerPlanner
 from np_sim.benchmarks import frozen_starts, load_benchmark
+from np_sim.cli import cli_boundary, non_negative_int, positive_int
 
 GOAL_MEDIAN_MS = 1.0
 PAPER_CPP_MS = 0.37
@@ -63,13 +64,15 @@ def measure(checkpoint: str | Path, episodes: int | None = None, seed: int = 0, 
             "goal_median_ms": GOAL_MEDIAN_MS, "paper_cpp_ms": PAPER_CPP_MS}
 
 
+@cli_boundary
 def main(argv=None) -> dict:
+    """Command-line entry point (usage in the module docstring); returns the figures of `measure`."""
     parser = argparse.ArgumentParser(prog="python -m np_policy.bench_planner", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--checkpoint", type=Path, default=Path("checkpoints/factorial_np_seed0.pt"))
-    parser.add_argument("--episodes", type=int, help="seeded subset of the 1,080 frozen starts (default all)")
-    parser.add_argument("--seed", type=int, default=0, help="subset seed")
-    parser.add_argument("--samples", type=int, default=0, metavar="N",
+    parser.add_argument("--episodes", type=positive_int, help="seeded subset of the 1,080 frozen starts (default all)")
+    parser.add_argument("--seed", type=non_negative_int, default=0, help="subset seed")
+    parser.add_argument("--samples", type=non_negative_int, default=0, metavar="N",
                         help="time the best of the mean rollout and N sampled rollouts (default 0: the paper's "
                              "planner)")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of text")

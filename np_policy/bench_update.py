@@ -33,6 +33,7 @@ from np_sim.observation import observation_sections, observation_size
 from np_policy.config import NetworkConfig, PPOConfig
 from np_policy.network import ActorCritic
 from np_policy.ppo import make_optimizer, ppo_update
+from np_sim.cli import cli_boundary, positive_int
 
 
 _RECIPE = PPOConfig()
@@ -77,7 +78,7 @@ def synthetic_obs(config: ObservationConfig, batch: int, generator: torch.Genera
     return obs
 
 
-def main(batch: int = 8192, forward_batch: int = 128, repeats: int = 5, threads: int | None = None,
+def measure(batch: int = 8192, forward_batch: int = 128, repeats: int = 5, threads: int | None = None,
          chunks: tuple[int, ...] = (8192, _RECIPE.update_chunk)) -> dict:
     """Median ms per minibatch update for each chunk size and forward samples/s; returns the numbers as a dict."""
     if threads:
@@ -130,17 +131,22 @@ def main(batch: int = 8192, forward_batch: int = 128, repeats: int = 5, threads:
     return result
 
 
-if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--batch", type=int, default=8192, help="minibatch size of the timed PPO update")
-    parser.add_argument("--chunks", type=int, nargs="+", default=[8192, _RECIPE.update_chunk],
+@cli_boundary
+def main(argv=None) -> dict:
+    """Command-line entry point (usage in the module docstring); prints and returns the figures of `measure`."""
+    parser = argparse.ArgumentParser(prog="python -m np_policy.bench_update", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--batch", type=positive_int, default=8192, help="minibatch size of the timed PPO update")
+    parser.add_argument("--chunks", type=positive_int, nargs="+", default=[8192, _RECIPE.update_chunk],
                         help="update_chunk values to time (samples per forward/backward pass; the batch = one pass)")
-    parser.add_argument("--forward-batch", type=int, default=128, help="batch of the timed act() calls (= train envs)")
-    parser.add_argument("--repeats", type=int, default=5, help="timed updates (median reported)")
-    parser.add_argument("--threads", type=int, default=None, help="torch intra-op threads (default: torch's)")
+    parser.add_argument("--forward-batch", type=positive_int, default=128,
+                        help="batch of the timed act() calls (= train envs)")
+    parser.add_argument("--repeats", type=positive_int, default=5, help="timed updates (median reported)")
+    parser.add_argument("--threads", type=positive_int, default=None,
+                        help="torch intra-op threads (default: torch's)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    args = parser.parse_args()
-    out = main(args.batch, args.forward_batch, args.repeats, args.threads, tuple(args.chunks))
+    args = parser.parse_args(argv)
+    out = measure(args.batch, args.forward_batch, args.repeats, args.threads, tuple(args.chunks))
     if args.json:
         print(json.dumps(out))
     else:
@@ -157,3 +163,8 @@ if __name__ == "__main__":
               f"(goal: 90 min in all)")
         print(f"forward act(), batch {out['forward_batch']}: {out['forward_act_ms']:.2f} ms/call, "
               f"{out['forward_samples_per_s']:.0f} samples/s")
+    return out
+
+
+if __name__ == "__main__":
+    main()

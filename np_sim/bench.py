@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
+from np_sim.cli import cli_boundary, non_negative_int, positive_float, positive_int
 from np_sim.config import EnvConfig
 from np_sim.env import ParkingEnv, ParkingVectorEnv
 from np_sim.examples import example_scenes
@@ -221,13 +222,15 @@ def _format(result: dict[str, float]) -> str:
     return "\n".join(lines)
 
 
+@cli_boundary
 def main(argv=None) -> dict[str, float]:
+    """Run the measurements (module docstring) and print them; returns them as a dict."""
     parser = argparse.ArgumentParser(prog="python -m np_sim.bench", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
-    parser.add_argument("--seconds", type=float, default=3.0, help="time per throughput measurement (s)")
-    parser.add_argument("--num-envs", type=int, default=128, help="vector-env width")
-    parser.add_argument("--seed", type=int, default=0, help="seed of actions and starts")
+    parser.add_argument("--seconds", type=positive_float, default=3.0, help="time per throughput measurement (s)")
+    parser.add_argument("--num-envs", type=positive_int, default=128, help="vector-env width")
+    parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of actions and starts")
     args = parser.parse_args(argv)
     result = run(args.seconds, args.num_envs, args.seed)
     print(json.dumps(result) if args.json else _format(result))

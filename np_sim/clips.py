@@ -77,7 +77,8 @@ import shapely
 from shapely.geometry import LinearRing, LineString
 from shapely.geometry import Polygon as ShapelyPolygon
 
-from np_sim.errors import ConfigError, NPSimError, SceneError
+from np_sim.cli import cli_boundary, positive_int
+from np_sim.errors import ConfigError, SceneError
 from np_sim.geodesic import GeodesicGrid, geodesic_grid
 from np_sim.frames import place
 from np_sim.kinematics import wrap_angle
@@ -1377,7 +1378,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--summary", action="store_true",
                         help="print site edge count, clip counts, frames, detections, drop-outs, jitter and the "
                              "difficulty breakdown (eval: all 47; train: the first --train-sample clips)")
-    parser.add_argument("--train-sample", type=int, default=50, metavar="N",
+    parser.add_argument("--train-sample", type=positive_int, default=50, metavar="N",
                         help="train clips the summary generates (default 50; 1000 = all, about a minute)")
     parser.add_argument("--figure", metavar="CLIP_NAME", help="draw this clip (eval name or train-<seed>)")
     parser.add_argument("--out", type=Path, default=None, metavar="PNG",
@@ -1387,8 +1388,10 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@cli_boundary
 def main(argv=None) -> dict:
-    """Run the CLI (see `build_parser`); returns what it printed as a dict (for tests)."""
+    """Run the CLI (see `build_parser`); returns what it printed as a dict (for tests). A user's mistake (an
+    unknown clip name, an unwritable figure path) prints one ``error:`` line and exits with status 2."""
     from np_sim.plotting import plot_clip  # matplotlib stays out of the library's import path
 
     args = build_parser().parse_args(argv)
@@ -1443,7 +1446,4 @@ def main(argv=None) -> dict:
 
 
 if __name__ == "__main__":
-    try:
-        main()
-    except NPSimError as error:
-        raise SystemExit(f"python -m np_sim.clips: error: {error}") from None
+    main()

@@ -16,6 +16,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from tqdm import tqdm
 
+from np_sim.cli import cli_boundary, non_negative_int, output_folder, positive_int
 from np_sim.env import EnvConfig, ParkingVectorEnv
 from np_sim.examples import example_scenes
 from np_sim.frames import from_target_frame
@@ -34,12 +35,14 @@ def _episode_path(start: np.ndarray, arcs: list[tuple[float, float]], hermite_wo
     return np.concatenate(pts)
 
 
+@cli_boundary
 def main(argv=None) -> dict:
+    """Run the tour (module docstring); returns the outcome counts, the PNGs written and the throughput."""
     parser = argparse.ArgumentParser(prog="python -m np_sim.demo", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=Path, default=Path("results/demo"), help="folder for the PNGs")
-    parser.add_argument("--steps", type=int, default=400, help="vector-env steps (each steps 128 episodes)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of starts and actions")
+    parser.add_argument("--out", type=output_folder, default=Path("results/demo"), help="folder for the PNGs")
+    parser.add_argument("--steps", type=positive_int, default=400, help="vector-env steps (each steps 128 episodes)")
+    parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of starts and actions")
     args = parser.parse_args(argv)
 
     scenes = [s for s in example_scenes() if s.tags.get("expect") != "no_path"]

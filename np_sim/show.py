@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
 
-from np_sim.errors import NPSimError, SceneError
+from np_sim.cli import cli_boundary, existing_file, positive_int
+from np_sim.errors import SceneError
 from np_sim.plotting import plot_scene
 from np_sim.scene import Scene
 
@@ -26,7 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
         ),
         epilog="example: python -m np_sim.show np_sim/examples/reverse_bay.json --out bay.png",
     )
-    parser.add_argument("scene", type=Path, metavar="SCENE.json", help="scene file to draw (validated on load)")
+    parser.add_argument("scene", type=existing_file, metavar="SCENE.json", help="scene file to draw (validated on load)")
     parser.add_argument(
         "--out",
         type=Path,
@@ -41,7 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="PATH_FILE",
         help="path to overlay: a .npy array or a .json list of [x, y] or [x, y, theta] rows (metres, radians)",
     )
-    parser.add_argument("--dpi", type=int, default=150, help="resolution of the PNG in dots per inch (default 150)")
+    parser.add_argument("--dpi", type=positive_int, default=150, help="resolution of the PNG in dots per inch (default 150)")
     return parser
 
 
@@ -76,8 +76,10 @@ def load_path(path_file: Path) -> np.ndarray:
     return points
 
 
+@cli_boundary
 def main(argv: list[str] | None = None) -> Path:
-    """Run the CLI on ``argv`` (default: ``sys.argv[1:]``); returns the path of the PNG written."""
+    """Run the CLI on ``argv`` (default: ``sys.argv[1:]``); returns the path of the PNG written. A bad scene or path
+    file prints one ``error:`` line and exits with status 2."""
     args = build_parser().parse_args(argv)
     scene = Scene.load(args.scene)
     path = load_path(args.path) if args.path is not None else None
@@ -91,8 +93,4 @@ def main(argv: list[str] | None = None) -> Path:
 
 
 if __name__ == "__main__":
-    try:
-        main()
-    except (NPSimError, OSError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        sys.exit(1)
+    main()

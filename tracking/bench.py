@@ -19,6 +19,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from np_sim.cli import cli_boundary, positive_int
 from np_sim.kinematics import arc_step
 from np_sim.plan import Plan
 from np_sim.scene import Scene
@@ -81,11 +82,12 @@ def run(repeats: int = 5) -> dict[str, float]:
             "control_dt_s": ec.control_dt_s, "goal_realtime": GOAL_REALTIME}
 
 
+@cli_boundary
 def main(argv=None) -> dict[str, float]:
     """Command-line entry point (usage in the module docstring; ``--help`` lists the options)."""
     parser = argparse.ArgumentParser(prog="python -m tracking.bench", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--repeats", type=int, default=5, help="executions per unrendered figure")
+    parser.add_argument("--repeats", type=positive_int, default=5, help="executions per unrendered figure")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
     figures = run(args.repeats)

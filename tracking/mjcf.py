@@ -12,6 +12,7 @@ from string import Template
 
 import numpy as np
 
+from np_sim.cli import cli_boundary
 from np_sim.vehicle import VehicleSpec
 from tracking.config import VehicleModelConfig
 from tracking.errors import TrackingError
@@ -118,8 +119,9 @@ def vehicle_xml(spec: VehicleSpec | None = None, model: VehicleModelConfig | Non
     return Template(TEMPLATE_PATH.read_text()).substitute(values)
 
 
+@cli_boundary
 def main(argv=None) -> Path:
-    """Write the default vehicle MJCF to a file."""
+    """Write the default vehicle MJCF to a file (an unwritable path prints one ``error:`` line, exit status 2)."""
     parser = argparse.ArgumentParser(prog="python -m tracking.mjcf", description=__doc__)
     parser.add_argument("-o", "--out", type=Path, default=Path("vehicle.xml"), help="output MJCF file")
     args = parser.parse_args(argv)

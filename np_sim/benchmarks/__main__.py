@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from np_sim.benchmarks.frozen import BENCHMARK_NAMES
 from np_sim.benchmarks.summary import format_summary, summarize, write_figures
+from np_sim.cli import cli_boundary, output_folder, positive_int
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -26,12 +26,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--summary", action="store_true", help="print the statistics")
     parser.add_argument("--benchmark", choices=[*BENCHMARK_NAMES, "all"], default="all",
                         help="benchmark to summarise and/or draw (default: all)")
-    parser.add_argument("--figure", type=Path, default=None, metavar="DIR",
+    parser.add_argument("--figure", type=output_folder, default=None, metavar="DIR",
                         help="write factorial_test_{easy,medium,hard}.png and/or topology_test.png into DIR")
-    parser.add_argument("--dpi", type=int, default=110, help="resolution of the PNGs in dots per inch (default 110)")
+    parser.add_argument("--dpi", type=positive_int, default=110, help="resolution of the PNGs in dots per inch (default 110)")
     return parser
 
 
+@cli_boundary
 def main(argv: list[str] | None = None) -> dict:
     """Run the CLI; returns ``{"summaries": [...], "figures": [paths]}``."""
     parser = build_parser()

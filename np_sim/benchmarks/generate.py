@@ -13,13 +13,13 @@ import argparse
 import sys
 import time
 from collections.abc import Callable
-from pathlib import Path
 
 from tqdm import tqdm
 
 from np_sim.benchmarks.factorial import FactorialConfig, generate_factorial
 from np_sim.benchmarks.frozen import BENCHMARK_NAMES, DATA_DIR, BenchmarkBuild, benchmark_json, benchmark_path
 from np_sim.benchmarks.topology import TopologyConfig, generate_topology
+from np_sim.cli import cli_boundary, output_folder
 from np_sim.errors import ConfigError
 from np_sim.scene import Scene
 
@@ -61,13 +61,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--benchmark", choices=[*BENCHMARK_NAMES, "all"], default="all",
                         help="which benchmark to generate (default: all)")
-    parser.add_argument("--out", type=Path, default=None, metavar="DIR",
+    parser.add_argument("--out", type=output_folder, default=None, metavar="DIR",
                         help=f"folder to write <name>_v1.json into (default: the shipped data folder {DATA_DIR})")
     parser.add_argument("--check", action="store_true",
                         help="regenerate in memory and verify byte equality with the shipped files (exit 1 if not)")
     return parser
 
 
+@cli_boundary
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the exit status (0, or 1 when ``--check`` finds a difference)."""
     args = build_parser().parse_args(argv)

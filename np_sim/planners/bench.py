@@ -22,6 +22,7 @@ import time
 import numpy as np
 
 from np_sim.benchmarks import frozen_starts, load_benchmark
+from np_sim.cli import cli_boundary, non_negative_int, positive_int
 from np_sim.collision import path_valid
 from np_sim.planners.hybrid_astar import HybridAStar
 
@@ -69,15 +70,16 @@ def bench(benchmark: str = "factorial", convention: str = "reference_point", epi
     return result
 
 
+@cli_boundary
 def main(argv=None) -> dict:
     """Command-line entry point (usage in the module docstring; ``--help`` lists the options)."""
     parser = argparse.ArgumentParser(prog="python -m np_sim.planners.bench", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
     parser.add_argument("--convention", choices=["reference_point", "footprint"], default="reference_point")
-    parser.add_argument("--episodes", type=int, help="seeded subset of the frozen starts for Hybrid A* (default all)")
-    parser.add_argument("--ompl-episodes", type=int, default=27, help="seeded subset for the OMPL peer (0 = skip)")
-    parser.add_argument("--seed", type=int, default=0, help="subset and OMPL seed")
+    parser.add_argument("--episodes", type=positive_int, help="seeded subset of the frozen starts for Hybrid A* (default all)")
+    parser.add_argument("--ompl-episodes", type=non_negative_int, default=27, help="seeded subset for the OMPL peer (0 = skip)")
+    parser.add_argument("--seed", type=non_negative_int, default=0, help="subset and OMPL seed")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
