@@ -49,7 +49,9 @@ import numpy as np
 from tqdm import tqdm
 
 from experiments.common import git_commit, run_folder, write_records
+from np_sim.cli import cli_boundary, fresh_folder, non_negative_float, non_negative_int, positive_int
 from np_sim.config import CONNECTOR_VARIANTS
+from np_sim.errors import ConfigError
 
 PLANNERS = ("neuralparker", "neuralparker_footprint", "np_guided_astar", "hybrid_astar")
 """Planners of the table, in the paper's row order (the footprint-aware NeuralParker after the paper-faithful one)."""
@@ -121,9 +123,9 @@ def build_planners(names: list[str], settings: PlannerSettings) -> dict[str, Any
     policy."""
     unknown = [n for n in names if n not in PLANNERS]
     if unknown:
-        raise ValueError(f"experiments.closed_loop: unknown planner(s) {unknown}; expected some of {list(PLANNERS)}")
+        raise ConfigError(f"experiments.closed_loop: unknown planner(s) {unknown}; expected some of {list(PLANNERS)}")
     if settings.footprint_samples < 0:
-        raise ValueError(f"--footprint-samples: expected >= 0, got {settings.footprint_samples}")
+        raise ConfigError(f"--footprint-samples: expected >= 0, got {settings.footprint_samples}")
     from np_sim.planners import HybridAStar, HybridAStarConfig
     from np_sim.vehicle import VehicleSpec
 
@@ -172,7 +174,7 @@ def clip_rows(clip, planners: dict[str, Any], controller: str, rrd_dir: Path | N
     ground = clip_world(clip)
     rows = []
     for name, planner in planners.items():
-        rrd = None if rrd_dir is None else rrd_dir / f"{clip.name}_{name}.rrd"
+        rrd = None if rrd_dir is None else rrd_path(rrd_dir, clip.name, name)
         run = run_clip(clip, planner, controller, config=config, rerun_path=rrd,
                        render=render)
         rec, first = run.record, run.first_plan
@@ -213,7 +215,7 @@ def split_clips(split: str) -> list:
         return load_clips("eval")
     if split == "train-difficult":
         return difficult_clips("train")
-    raise ValueError(f"--split: expected one of {CLIP_SPLITS}, got {split!r}")
+    raise ConfigError(f"--split: expected one of {CLIP_SPLITS}, got {split!r}")
 
 
 def _init_worker(names: list[str], settings: PlannerSettings, split: str) -> None:
@@ -242,9 +244,9 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
     from tracking.controllers import CONTROLLERS
 
     if controller not in CONTROLLERS:
-        raise ValueError(f"--controller: expected one of {sorted(CONTROLLERS)}, got {controller!r}")
+        raise ConfigError(f"--controller: expected one of {sorted(CONTROLLERS)}, got {controller!r}")
     if workers < 1:
-        raise ValueError(f"--workers: expected >= 1, got {workers}")
+        raise ConfigError(f"--workers: expected >= 1, got {workers}")
     names = list(PLANNERS if planners is None else planners)
     notes = []
     settings = PlannerSettings() if settings is None else settings
@@ -276,7 +278,7 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
         known = {c.name: k for k, c in enumerate(clips)}
         missing = [n for n in clip_names if n not in known]
         if missing:
-            raise ValueError(f"--clip-names: {missing} are not {split} clips ({clips[0].name} … {clips[-1].name})")
+            raise ConfigError(f"--clip-names: {missing} are not {split} clips ({clips[0].name} … {clips[-1].name})")
         indices = [known[n] for n in clip_names]
     else:
         indices = list(range(len(clips)))[:clips_limit]
@@ -306,7 +308,8 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
     write_records(folder, records)
     (folder / "table.md").write_text(table.strip() + "\n")
     figure = search_time_figure(records, folder / "search_time.png")
-    merged = merge_rrd(rrd_dir, folder / "closed_loop.rrd") if rrd_dir is not None else None
+    written = [] if rrd_dir is None else [rrd_path(rrd_dir, clips[k].name, name) for k in indices for name in names]
+    merged = merge_rrd([p for p in written if p.exists()], folder / "closed_loop.rrd")
     (folder / "config.json").write_text(json.dumps({
         "planners": names, "checkpoint": str(settings.checkpoint),
         "footprint_checkpoint": str(footprint) if "neuralparker_footprint" in names else None,
@@ -418,14 +421,21 @@ def search_time_figure(records: list[dict], path: Path) -> Path | None:
     return path
 
 
-def merge_rrd(rrd_dir: Path, out: Path) -> Path:
-    """Merge every run's ``.rrd`` into one file with ``rerun rrd merge``."""
+def rrd_path(rrd_dir: Path, clip_name: str, planner: str) -> Path:
+    """The per-run recording of ``planner`` on clip ``clip_name`` in ``rrd_dir``."""
+    return rrd_dir / f"{clip_name}_{planner}.rrd"
+
+
+def merge_rrd(files: list[Path], out: Path) -> Path | None:
+    """Merge the given per-run ``.rrd`` files (this run's only) into one file with ``rerun rrd merge``; None when
+    there are none."""
+    if not files:
+        return None
     exe = Path(sys.executable).parent / "rerun"
     exe = str(exe) if exe.exists() else shutil.which("rerun")
     if exe is None:
         raise FileNotFoundError("merge_rrd: the 'rerun' command is missing; install rerun-sdk into the venv")
-    files = sorted(str(p) for p in rrd_dir.glob("*.rrd"))
-    subprocess.run([exe, "rrd", "merge", "-o", str(out), *files], check=True, capture_output=True)
+    subprocess.run([exe, "rrd", "merge", "-o", str(out), *map(str, files)], check=True, capture_output=True)
     return out
 
 
@@ -448,15 +458,19 @@ def _rescue_round(text: str) -> tuple[int, float, str]:
                                          f"of {', '.join(FIRST_ARCS)}, got {text!r}") from error
 
 
+@cli_boundary
 def main(argv=None) -> dict[str, Any]:
-    """Command-line entry point (usage in the module docstring; ``--help`` lists the options)."""
+    """Command-line entry point (usage in the module docstring; ``--help`` lists the options; a user's mistake
+    exits 2 with one error line)."""
+    from tracking.controllers import CONTROLLERS
+
     parser = argparse.ArgumentParser(prog="python -m experiments.closed_loop", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--clips", action="store_true", required=True, help="run the 47 held-out site clips")
     parser.add_argument("--split", choices=CLIP_SPLITS, default="eval",
                         help="clip set: the 47 held-out clips (default), or the 304 difficult training clips in "
                              "clip order (the tuning set of the footprint-aware planner: add --clips-limit 94)")
-    parser.add_argument("--clips-limit", type=int, default=None, help="only the first N clips")
+    parser.add_argument("--clips-limit", type=positive_int, default=None, help="only the first N clips")
     parser.add_argument("--clip-names", nargs="+", default=None, help="only these clips (e.g. eval-1000016)")
     parser.add_argument("--planners", nargs="+", choices=PLANNERS, default=None,
                         help="planners to run (default all; neuralparker_footprint is left out with a note when "
@@ -466,15 +480,16 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--footprint-checkpoint", type=Path, default=FOOTPRINT_CHECKPOINT,
                         help=f"footprint-aware site NeuralParker checkpoint (default {FOOTPRINT_CHECKPOINT})")
     parser.add_argument("--no-render", action="store_true", help="no off-screen camera frames in the .rrd")
-    parser.add_argument("--render-clips", type=int, default=3, help="clips with camera frames (default 3)")
-    parser.add_argument("--out", type=Path, default=None, help="run folder (default results/closed_loop/<time>)")
-    parser.add_argument("--workers", type=int, default=1, help="parallel processes (default 1)")
-    parser.add_argument("--controller", default="lqr", help="lateral controller (lqr, stanley, pure_pursuit)")
+    parser.add_argument("--render-clips", type=non_negative_int, default=3, help="clips with camera frames (default 3)")
+    parser.add_argument("--out", type=fresh_folder, default=None,
+                        help="new or empty run folder (default: a fresh results/closed_loop/<time>)")
+    parser.add_argument("--workers", type=positive_int, default=1, help="parallel processes (default 1)")
+    parser.add_argument("--controller", choices=sorted(CONTROLLERS), default="lqr", help="lateral controller")
     parser.add_argument("--replan", choices=("on_invalid", "every_frame"), default="on_invalid",
                         help="on_invalid (default): every frame, replan only when the followed plan collides with "
                              "that frame's detections or the vehicle is off it; every_frame: replan every frame and "
                              "always follow the newest plan")
-    parser.add_argument("--track-window", type=int, default=1,
+    parser.add_argument("--track-window", type=positive_int, default=1,
                         help="filter each object's detections over this many frames before planning (mean shape "
                              "at the latest centroid, dropouts held; default 1 = raw frames, as on the paper's "
                              "vehicle)")
@@ -482,15 +497,15 @@ def main(argv=None) -> dict[str, Any]:
                         help="a replan of a moving vehicle starts from the pose ahead on its followed plan where it "
                              "can still stop (braking distance + one frame + 0.2 m), and the vehicle drives the "
                              "followed plan up to there (trajectory stitching; default: from the simulated pose)")
-    parser.add_argument("--footprint-margin", type=float, default=0.0, metavar="M",
+    parser.add_argument("--footprint-margin", type=non_negative_float, default=0.0, metavar="M",
                         help="NeuralParker (footprint)'s rollouts are checked with the footprint grown by M metres "
                              "on every side (default 0)")
-    parser.add_argument("--footprint-rescue-clearance", type=float, default=FOOTPRINT_RESCUE_CLEARANCE_M,
+    parser.add_argument("--footprint-rescue-clearance", type=non_negative_float, default=FOOTPRINT_RESCUE_CLEARANCE_M,
                         metavar="M",
                         help="NeuralParker (footprint): run the rescue rounds also when the best plan keeps less "
                              "than M metres of clearance (levels 0.2 / 0.1 / 0 m; default "
                              f"{FOOTPRINT_RESCUE_CLEARANCE_M:g}; 0: only when no rollout succeeds)")
-    parser.add_argument("--search-margin", type=float, default=0.0, metavar="M",
+    parser.add_argument("--search-margin", type=non_negative_float, default=0.0, metavar="M",
                         help="Hybrid A* and NP-Guided A*'s search plan for the footprint grown by M metres on every "
                              "side (default 0)")
     parser.add_argument("--connector", choices=CONNECTOR_VARIANTS, default=None,
@@ -501,7 +516,7 @@ def main(argv=None) -> dict[str, Any]:
                         help=f"the same for NeuralParker (footprint) (default {FOOTPRINT_CONNECTOR}: its plans end on "
                              f"the target heading whenever that candidate is feasible, not 10° off it at the edge of "
                              f"the parking tolerance)")
-    parser.add_argument("--footprint-samples", type=int, default=FOOTPRINT_SAMPLES, metavar="N",
+    parser.add_argument("--footprint-samples", type=non_negative_int, default=FOOTPRINT_SAMPLES, metavar="N",
                         help=f"NeuralParker (footprint) plays the best of its mean rollout and N seeded sampled "
                              f"rollouts, chosen by steerability, then drive time + clearance + reversal + "
                              f"terminal-heading cost (default {FOOTPRINT_SAMPLES}; 0 = the paper's mean-action "
@@ -528,7 +543,8 @@ def main(argv=None) -> dict[str, Any]:
     print(result["table"])
     print(f"\nwall time {result['wall_time_s']:.0f} s; results in {folder}/: records.csv, records.json, table.md, "
           f"config.json" + (", search_time.png" if result["figure"] else ""))
-    print(f"Rerun recording of every run: {result['rrd']}  (open it with: rerun {result['rrd']})")
+    if result["rrd"] is not None:
+        print(f"Rerun recording of every run: {result['rrd']}  (open it with: rerun {result['rrd']})")
     return result
 
 

@@ -11,12 +11,30 @@ from typing import Any
 
 import numpy as np
 
+from np_sim.cli import folder_problem
+from np_sim.errors import ConfigError
+
 
 def run_folder(experiment: str, out: Path | None) -> Path:
-    """``out`` or ``results/<experiment>/<timestamp>/``, created."""
-    folder = Path(out) if out is not None else Path("results") / experiment / time.strftime("%Y%m%d-%H%M%S")
-    folder.mkdir(parents=True, exist_ok=True)
-    return folder
+    """A fresh run folder, created: ``out`` when it does not exist yet or is empty (ConfigError when it is a file
+    or holds an earlier run's files), else a new ``results/<experiment>/<timestamp>/`` (``-2``, ``-3`` … appended
+    when that second's folder exists). An earlier run's results are never reused or overwritten."""
+    if out is not None:
+        problem = folder_problem(Path(out))
+        if problem is not None:
+            raise ConfigError(f"--out: {problem}")
+        Path(out).mkdir(parents=True, exist_ok=True)
+        return Path(out)
+    stamp = Path("results") / experiment / time.strftime("%Y%m%d-%H%M%S")
+    stamp.parent.mkdir(parents=True, exist_ok=True)
+    folder, n = stamp, 1
+    while True:
+        try:
+            folder.mkdir()
+            return folder
+        except FileExistsError:
+            n += 1
+            folder = stamp.with_name(f"{stamp.name}-{n}")
 
 
 def git_commit() -> str:

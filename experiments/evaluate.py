@@ -27,6 +27,7 @@ from tqdm import tqdm
 from experiments.common import git_commit, mean_sd, run_folder, write_records
 from np_policy.planner import ACTIONS, NeuralParkerPlanner
 from np_sim.benchmarks import frozen_starts, load_benchmark
+from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int
 from np_sim.config import CONNECTOR_VARIANTS
 
 
@@ -82,24 +83,28 @@ def format_table(records: list[dict[str, Any]], n_seeds: int) -> str:
     return header + "\n" + row
 
 
+@cli_boundary
 def main(argv=None) -> dict[str, Any]:
+    """Command-line entry point (usage in the module docstring; a user's mistake exits 2 with one error line)."""
     parser = argparse.ArgumentParser(prog="python -m experiments.evaluate", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
-    parser.add_argument("--checkpoints", type=Path, nargs="+", required=True, help="one checkpoint per seed")
+    parser.add_argument("--checkpoints", type=existing_file, nargs="+", required=True,
+                        help="one checkpoint per seed")
     parser.add_argument("--connector", choices=CONNECTOR_VARIANTS,
                         help="override the terminal connector (centred: the fixed nine, target-aligned first)")
-    parser.add_argument("--samples", type=int, default=0, metavar="N",
+    parser.add_argument("--samples", type=non_negative_int, default=0, metavar="N",
                         help="plan with the best of the mean rollout and N seeded sampled rollouts (default 0: the "
                              "paper's deterministic planner)")
     parser.add_argument("--action", choices=ACTIONS, default="mean",
                         help="mean (default): the deterministic planner of the paper and SPEC; sample: one rollout "
                              "of sampled actions per start, as a Tianshou PPO policy acts at test time by default")
-    parser.add_argument("--action-seed", type=int, default=0, metavar="S",
+    parser.add_argument("--action-seed", type=non_negative_int, default=0, metavar="S",
                         help="noise seed of --action sample (with the start pose) and of --samples' rollouts "
                              "(default 0)")
-    parser.add_argument("--out", type=Path, help="run folder (default: results/evaluate/<timestamp>)")
-    parser.add_argument("--limit", type=int, help="only the first N frozen episodes (smoke runs)")
+    parser.add_argument("--out", type=fresh_folder,
+                        help="new or empty run folder (default: a fresh results/evaluate/<timestamp>)")
+    parser.add_argument("--limit", type=positive_int, help="only the first N frozen episodes (smoke runs)")
     args = parser.parse_args(argv)
     if args.action == "sample" and args.samples:
         parser.error(f"--action sample plays one sampled rollout per start; it does not combine with --samples "

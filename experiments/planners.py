@@ -26,6 +26,7 @@ from tqdm import tqdm
 
 from experiments.common import git_commit, run_folder, write_records
 from np_sim.benchmarks import frozen_starts, load_benchmark
+from np_sim.cli import cli_boundary, fresh_folder, non_negative_int, positive_int
 from np_sim.planners import HybridAStar
 
 METHODS = ("hybrid_astar", "np_guided_astar", "ompl_rrtstar", "neuralparker", "staged_astar_np")
@@ -128,8 +129,10 @@ def format_table(records: list[dict[str, Any]], methods: list[str]) -> str:
     return "\n".join(lines)
 
 
+@cli_boundary
 def main(argv=None) -> dict[str, Any]:
-    """Command-line entry point (usage in the module docstring; ``--help`` lists the options)."""
+    """Command-line entry point (usage in the module docstring; ``--help`` lists the options; a user's mistake
+    exits 2 with one error line)."""
     parser = argparse.ArgumentParser(prog="python -m experiments.planners", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
@@ -137,9 +140,10 @@ def main(argv=None) -> dict[str, Any]:
                         help=f"NeuralParker checkpoint for the learned methods (default {DEFAULT_CHECKPOINT})")
     parser.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS))
     parser.add_argument("--convention", choices=["reference_point", "footprint"], default="reference_point")
-    parser.add_argument("--ompl-seed", type=int, default=0, help="OMPL's random seed")
-    parser.add_argument("--out", type=Path, help="run folder (default: results/planners/<timestamp>)")
-    parser.add_argument("--limit", type=int, help="only the first N frozen episodes (smoke runs)")
+    parser.add_argument("--ompl-seed", type=non_negative_int, default=0, help="OMPL's random seed")
+    parser.add_argument("--out", type=fresh_folder,
+                        help="new or empty run folder (default: a fresh results/planners/<timestamp>)")
+    parser.add_argument("--limit", type=positive_int, help="only the first N frozen episodes (smoke runs)")
     args = parser.parse_args(argv)
     result = run(args.benchmark, args.methods, args.checkpoint, args.convention, args.out, args.limit, args.ompl_seed)
     print(result["table"])

@@ -27,6 +27,8 @@ from tqdm import tqdm
 
 from experiments.common import git_commit, run_folder, write_records
 from np_sim.benchmarks import frozen_starts, load_benchmark
+from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int
+from np_sim.errors import ConfigError
 from tracking.controllers import CONTROLLERS
 from tracking.executor import execute
 from tracking.validators import validate_plan
@@ -45,10 +47,10 @@ def make_planner(name: str, convention: str, checkpoint: Path | None):
         from np_policy.planner import NeuralParkerPlanner
 
         if checkpoint is None:
-            raise ValueError("--planner neuralparker needs --checkpoint PATH (e.g. "
-                             "checkpoints/factorial_np_seed0.pt)")
+            raise ConfigError("--planner neuralparker needs --checkpoint PATH (e.g. "
+                              "checkpoints/factorial_np_seed0.pt)")
         return NeuralParkerPlanner.from_checkpoint(checkpoint)
-    raise ValueError(f"--planner: expected one of {PLANNERS}, got {name!r}")
+    raise ConfigError(f"--planner: expected one of {PLANNERS}, got {name!r}")
 
 
 def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controllers: tuple[str, ...] = ("lqr",),
@@ -59,13 +61,13 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
     """Plan, validate and execute the frozen starts; returns the records, the table and the run folder."""
     for c in controllers:
         if c not in CONTROLLERS:
-            raise ValueError(f"--controller: expected one of {sorted(CONTROLLERS)} or 'all', got {c!r}")
+            raise ConfigError(f"--controller: expected one of {sorted(CONTROLLERS)} or 'all', got {c!r}")
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
+    source = make_planner(planner, convention, checkpoint)
     folder = run_folder("track", out)
     per_scene = starts.shape[1] if per_scene is None else min(per_scene, starts.shape[1])
     episodes = [(k, j) for k in range(len(scenes)) for j in range(per_scene)][:limit]
-    source = make_planner(planner, convention, checkpoint)
     records: list[dict[str, Any]] = []
     for n, (k, j) in enumerate(tqdm(episodes, desc=f"{planner} → MuJoCo", unit="ep", disable=not progress)):
         scene = scenes[k]
@@ -118,21 +120,28 @@ def format_table(records: list[dict[str, Any]], controllers) -> str:
     return "\n".join(rows) + f"\n\n{n} episodes; errors over executed runs, final error over executed successes."
 
 
+@cli_boundary
 def main(argv=None) -> dict[str, Any]:
-    """Command-line entry point (usage in the module docstring; ``--help`` lists the options)."""
+    """Command-line entry point (usage in the module docstring; ``--help`` lists the options; a user's mistake
+    exits 2 with one error line)."""
     parser = argparse.ArgumentParser(prog="python -m experiments.track", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
     parser.add_argument("--planner", choices=PLANNERS, default="hybrid_astar")
     parser.add_argument("--convention", choices=["reference_point", "footprint"], default="footprint",
                         help="collision convention the planner plans under (default: footprint)")
-    parser.add_argument("--checkpoint", type=Path, default=None, help="NeuralParker checkpoint (--planner neuralparker)")
-    parser.add_argument("--controller", default="lqr", help="lqr, stanley, pure_pursuit or all")
-    parser.add_argument("--per-scene", type=int, default=None, help="only the first K frozen starts of each scene")
-    parser.add_argument("--limit", type=int, default=None, help="only the first N episodes in scene order")
-    parser.add_argument("--rrd-episodes", type=int, default=2, help="write .rrd files for the first N episodes")
+    parser.add_argument("--checkpoint", type=existing_file, default=None,
+                        help="NeuralParker checkpoint (--planner neuralparker)")
+    parser.add_argument("--controller", choices=[*CONTROLLERS, "all"], default="lqr",
+                        help="lqr, stanley, pure_pursuit or all")
+    parser.add_argument("--per-scene", type=positive_int, default=None,
+                        help="only the first K frozen starts of each scene")
+    parser.add_argument("--limit", type=positive_int, default=None, help="only the first N episodes in scene order")
+    parser.add_argument("--rrd-episodes", type=non_negative_int, default=2,
+                        help="write .rrd files for the first N episodes")
     parser.add_argument("--no-render", action="store_true", help="no off-screen frames in the .rrd files")
-    parser.add_argument("--out", type=Path, default=None, help="run folder (default results/track/<timestamp>)")
+    parser.add_argument("--out", type=fresh_folder, default=None,
+                        help="new or empty run folder (default: a fresh results/track/<timestamp>)")
     args = parser.parse_args(argv)
     controllers = tuple(CONTROLLERS) if args.controller == "all" else (args.controller,)
     result = track(args.benchmark, args.planner, controllers, args.convention, args.checkpoint, args.limit,

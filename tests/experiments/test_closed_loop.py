@@ -3,6 +3,7 @@
 import argparse
 import csv
 import json
+import re
 
 import pytest
 import torch
@@ -52,15 +53,20 @@ def test_two_clips_run_end_to_end_and_the_known_feasible_clip_parks(tmp_path, si
     assert json.loads((out / "config.json").read_text())["clips"] == [KNOWN_FEASIBLE, "eval-1000009"]
 
 
-def test_a_missing_checkpoint_is_a_clear_error(tmp_path):
-    with pytest.raises(FileNotFoundError, match="site NeuralParker checkpoint"):
+def test_a_missing_checkpoint_is_a_clear_error(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
         main(["--clips", "--clips-limit", "1", "--checkpoint", str(tmp_path / "none.pt"), "--out", str(tmp_path)])
+    assert exit_info.value.code == 2
+    assert "site NeuralParker checkpoint" in capsys.readouterr().err
 
 
-def test_a_named_footprint_planner_needs_its_checkpoint(tmp_path, site_checkpoint):
-    with pytest.raises(FileNotFoundError, match="footprint-aware site checkpoint .*none_fp.pt does not exist"):
+def test_a_named_footprint_planner_needs_its_checkpoint(tmp_path, site_checkpoint, capsys):
+    with pytest.raises(SystemExit) as exit_info:
         main(["--clips", "--clips-limit", "1", "--planners", "neuralparker_footprint", "--checkpoint",
-              str(site_checkpoint), "--footprint-checkpoint", str(tmp_path / "none_fp.pt"), "--out", str(tmp_path)])
+              str(site_checkpoint), "--footprint-checkpoint", str(tmp_path / "none_fp.pt"), "--out",
+              str(tmp_path / "run")])
+    assert exit_info.value.code == 2
+    assert re.search("footprint-aware site checkpoint .*none_fp.pt does not exist", capsys.readouterr().err)
 
 
 def test_perception_filter_and_search_margin_reach_the_run(tmp_path):
@@ -114,11 +120,10 @@ def test_footprint_samples_and_connector_reach_the_planner_and_the_config(tmp_pa
     assert planner.config.env.connector.headings_deg == (90.0, 80.0, 100.0)
     assert planner.config.env.connector.mode == "fixed"
     with pytest.raises(ValueError, match="--footprint-samples: expected >= 0"):
-        main(["--clips", "--clips-limit", "1", "--planners", "neuralparker_footprint", "--footprint-samples", "-1",
-              "--out", str(tmp_path / "bad")])
+        build_planners(["neuralparker_footprint"], PlannerSettings(footprint_samples=-1))
 
 
-def test_the_difficult_training_clips_run_by_split(tmp_path, monkeypatch):
+def test_the_difficult_training_clips_run_by_split(tmp_path, monkeypatch, capsys):
     import np_sim.clips as clips_module
 
     clips, _ = clips_module.generate_split("train", 12)  # the first twelve training clips: two are difficult
@@ -132,9 +137,11 @@ def test_the_difficult_training_clips_run_by_split(tmp_path, monkeypatch):
     assert [r["clip"] for r in result["records"]] == ["train-0000009"]
     assert "Closed loop on 1 difficult training site clips" in result["table"]
     assert "Paper" not in result["table"]  # the paper's figures are for its held-out clips
-    with pytest.raises(ValueError, match=r"\['eval-1000016'\] are not train-difficult clips \(train-0000009 …"):
+    with pytest.raises(SystemExit) as exit_info:
         main(["--clips", "--split", "train-difficult", "--clip-names", KNOWN_FEASIBLE, "--planners", "hybrid_astar",
               "--no-render", "--out", str(tmp_path / "bad")])
+    assert exit_info.value.code == 2
+    assert re.search(r"\['eval-1000016'\] are not train-difficult clips \(train-0000009 …", capsys.readouterr().err)
 
 
 def test_stitch_flag_reaches_the_clip_runs_config_and_table(tmp_path):

@@ -82,6 +82,8 @@ def test_cli_smoke_writes_records(tmp_path: Path):
     assert "NP-Guided A* / Hybrid A* median plan time" in result["table"]
 
 
-def test_learned_methods_need_a_checkpoint(tmp_path: Path):
-    with pytest.raises(FileNotFoundError, match="need a NeuralParker checkpoint"):
+def test_learned_methods_need_a_checkpoint(tmp_path: Path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
         main(["--limit", "1", "--out", str(tmp_path), "--checkpoint", str(tmp_path / "none.pt")])
+    assert exit_info.value.code == 2
+    assert "need a NeuralParker checkpoint" in capsys.readouterr().err
