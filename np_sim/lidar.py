@@ -3,7 +3,7 @@
 Beam i points at θ + 2πi/n (beam 0 along the heading, counter-clockwise). ``d_i`` is the reference-point
 distance to the first obstacle or boundary crossing (exact, zero-tolerance segment-bound tests: corners hit; circles as 16-segment rings),
 capped at the range; ``b_i`` the distance from the reference point to the footprint rectangle along the beam;
-the policy sees ``max(d_i − b_i, 0)``.
+the policy sees ``max(d_i − b_i, 0)``, written once, in the observation kernel (``np_sim.kernels.step``).
 """
 
 from __future__ import annotations
@@ -44,7 +44,3 @@ def footprint_ranges(vehicle: VehicleSpec | None = None, n_beams: int = 120) -> 
         ty = np.where(np.abs(s) > 0, 0.5 * vehicle.width_m / np.where(np.abs(s) > 0, np.abs(s), 1.0), np.inf)
     return np.minimum(tx, ty)
 
-
-def rectified_clearance(d: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """s^ℓ_i = max(d_i − b_i, 0) (paper eq:lidar-clearance)."""
-    return np.maximum(np.asarray(d, float) - np.asarray(b, float), 0.0)

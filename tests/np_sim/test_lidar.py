@@ -8,7 +8,10 @@ import numpy as np
 import pytest
 from shapely.geometry import LinearRing, LineString, Point, Polygon
 
-from np_sim.lidar import cast_rays, footprint_ranges, rectified_clearance
+from np_sim.config import EnvConfig
+from np_sim.env import ParkingEnv
+from np_sim.lidar import cast_rays, footprint_ranges
+from np_sim.observation import observation_sections
 from np_sim.scene import Scene
 from np_sim.vehicle import VehicleSpec
 
@@ -131,15 +134,21 @@ def test_circles_are_seen_as_16_gons(seed):
     """A beam meets the 16-segment ring of the circle (App. A), never the exact disc: its distance equals the ray's
     crossing with the ring (1e-9) and is at least the exact circle distance (the ring is inscribed). Beams whose
     line passes closer to the centre than the ring's inradius r·cos(π/16) always hit; beams that clip the disc
-    outside the ring miss it."""
+    outside the ring miss it. Besides random poses, one pose per ring edge aims beam 0 through the sliver between
+    that edge and the circle (the line at distance r(1 + cos(π/16))/2 from the centre), so clips always occur."""
     rng = np.random.default_rng(100 + seed)
     c = rng.uniform(-3, 3, 2) + np.array([0.0, 8.0])
     r = float(rng.uniform(1.0, 2.5))
     s = scene([{"circle": [float(c[0]), float(c[1]), r]}], target=[0.0, -20.0, 0.0])
     ring = LinearRing(s.obstacles[0].ring(16))
     n_hit = n_clip = 0
-    for _ in range(6):
-        pose = (*rng.uniform(-3, 3, 2), rng.uniform(-math.pi, math.pi))
+    poses = [(*rng.uniform(-3, 3, 2), rng.uniform(-math.pi, math.pi)) for _ in range(6)]
+    h = r * (1.0 + math.cos(math.pi / 16)) / 2.0
+    for k in range(16):
+        a = 2 * math.pi * (k + 0.5) / 16  # outward normal of ring edge k
+        q = c + h * np.array([math.cos(a), math.sin(a)])
+        poses.append((q[0] + 4.0 * math.sin(a), q[1] - 4.0 * math.cos(a), a + math.pi / 2))
+    for pose in poses:
         o = np.array(pose[:2])
         d = cast_rays(s, pose)
         for i in range(120):
@@ -162,7 +171,7 @@ def test_circles_are_seen_as_16_gons(seed):
             if t_circle < 10.0 and math.isinf(t_ring):
                 assert d[i] == 10.0  # clipped the exact disc between the ring and the circle: not seen
                 n_clip += 1
-    assert n_hit > 0
+    assert n_hit > 0 and n_clip >= 16
 
 
 def test_circle_ring_hand_case():
@@ -181,25 +190,22 @@ def test_circle_ring_hand_case():
 # ---------------------------------------------------------------------------------------------- clearance
 
 
-def test_rectified_clearance_formula():
-    d = np.array([10.0, 5.0, 3.0, 0.5, 0.0, 3.76])
-    b = np.array([3.76, 0.971, 3.5, 0.929, 0.971, 3.76])
-    s = rectified_clearance(d, b)
-    np.testing.assert_array_equal(s, [10.0 - 3.76, 5.0 - 0.971, 0.0, 0.0, 0.0, 0.0])
-    assert np.all(s >= 0.0)
-    assert rectified_clearance([1.0], [2.0])[0] == 0.0  # lists accepted, negatives clipped
-
-
-def test_rectified_clearance_end_to_end():
-    """A pose 2 m behind a wall: the front beams see d = 2 < b_0 = 3.76 (the wall cuts the footprint), clipped to 0;
-    the rear beams see max(d − b, 0) with d capped at 10."""
+def test_observed_clearance_is_the_rectified_shapely_distance():
+    """The env's LiDAR observation (the kernel the policy sees, eq:lidar-clearance) against max(d − b, 0) with d
+    and b measured by shapely rays: d to the boundary ring capped at 10 m, b to the footprint ring. A pose 2 m
+    behind the x = 50 wall: the front beams see d < b (clipped to 0), the rear and side beams 10 − b."""
     s = scene([])
-    pose = (48.0, 0.0, 0.0)  # boundary x = 50 is 2 m ahead
-    d = cast_rays(s, pose)
-    b = footprint_ranges()
-    clear = rectified_clearance(d, b)
-    np.testing.assert_array_equal(clear, np.maximum(d - b, 0.0))
-    assert d[0] == pytest.approx(2.0) and clear[0] == 0.0
-    assert clear[60] == pytest.approx(10.0 - 0.929, abs=1e-12)
-    assert clear[30] == pytest.approx(10.0 - 0.971, abs=1e-12)
-    assert np.all(clear >= 0) and np.any(clear == 0) and np.any(clear > 0)
+    pose = np.array([48.0, 0.0, 0.0])
+    config = EnvConfig()
+    obs, _ = ParkingEnv(s, config).reset(options={"start": pose})
+    lidar = obs[slice(*observation_sections(config.observation)["lidar"])]
+    wall, body = LinearRing(s.boundary), LinearRing(VehicleSpec().footprint(pose))
+    want = []
+    for i in range(120):
+        phi = 2 * math.pi * i / 120
+        d = min(ray_distance_to(wall, pose[:2], phi, 10.0), 10.0)
+        want.append(max(d - ray_distance_to(body, pose[:2], phi), 0.0))
+    np.testing.assert_allclose(lidar, want, rtol=0, atol=1e-5)  # float32 observation
+    assert lidar[0] == 0.0  # d = 2 < b = 3.76
+    assert lidar[60] == pytest.approx(10.0 - 0.929, abs=1e-5) and lidar[30] == pytest.approx(10.0 - 0.971, abs=1e-5)
+    assert np.any(lidar == 0) and np.any(lidar > 0)

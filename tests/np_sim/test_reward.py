@@ -1,9 +1,10 @@
-"""Reward terms against hand-computed values (paper eq:step-reward, eq:effective-kappa, eq:terminal-reward)."""
+"""The reward oracle (tests/reward_oracle.py) against hand-computed values (paper eq:step-reward, eq:effective-kappa,
+eq:terminal-reward); the env's compiled rewards are checked against it in test_env.py."""
 
 import pytest
 
 from np_sim.config import RewardConfig
-from np_sim.reward import effective_kappa_change, hermite_score, step_reward, success_reward
+from reward_oracle import effective_kappa_change, hermite_score, step_reward, success_reward
 
 
 def test_step_reward_first_arc_has_no_history_terms():

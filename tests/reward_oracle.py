@@ -1,7 +1,8 @@
-"""Reward terms of the planning episode (paper eq:step-reward, eq:effective-kappa, eq:terminal-reward).
+"""Test oracle: the reward terms of the planning episode written as plain Python (paper eq:step-reward,
+eq:effective-kappa, eq:terminal-reward), for tests to compare the env against.
 
-Pure functions used by tests, planners and analyses; the compiled env step (``np_sim.kernels.step``) applies the
-same formulas per arc. Weights come from ``RewardConfig``.
+The env never calls these: its rewards are computed once, in the compiled step kernel (``np_sim.kernels.step``).
+``tests/np_sim/test_reward.py`` pins this oracle to hand-computed values; weights come from ``RewardConfig``.
 """
 
 from __future__ import annotations
