@@ -11,11 +11,70 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import types
+import typing
 from dataclasses import dataclass
 from typing import Any
 
 from np_sim.config import config_from_dict
 from np_sim.errors import ConfigError
+
+
+def _matches(hint: Any, value: Any) -> bool:
+    """``value`` (as read from JSON, or a stored config) has the type ``hint`` asks for; ints count as floats,
+    bools count as neither; hints of other kinds are not checked here."""
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if hint is bool:
+        return isinstance(value, bool)
+    if hint is int:
+        return isinstance(value, int) and not isinstance(value, bool)
+    if hint is float:
+        return isinstance(value, (int, float)) and not isinstance(value, bool)
+    if hint is str:
+        return isinstance(value, str)
+    if hint is type(None):
+        return value is None
+    if origin is typing.Literal:
+        return any(value == a and type(value) is type(a) for a in args)
+    if origin in (typing.Union, types.UnionType):
+        return any(_matches(a, value) for a in args)
+    if origin is tuple:
+        if not isinstance(value, (list, tuple)):
+            return False
+        if len(args) == 2 and args[1] is Ellipsis:
+            return all(_matches(args[0], v) for v in value)
+        return len(args) == len(value) and all(_matches(a, v) for a, v in zip(args, value))
+    return True
+
+
+def _describe(hint: Any) -> str:
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if origin is typing.Literal:
+        return "one of " + ", ".join(repr(a) for a in args)
+    if origin in (typing.Union, types.UnionType):
+        return " or ".join(_describe(a) for a in args)
+    if origin is tuple:
+        return f"a list of {_describe(args[0])}" if args[1:] == (Ellipsis,) else f"a list of {len(args)} values"
+    names = {bool: "true or false", int: "an integer", float: "a number", str: "a string", type(None): "null"}
+    return names.get(hint, getattr(hint, "__name__", str(hint)))
+
+
+def check_types(cls: type, data: Any, path: str | None = None) -> None:
+    """ConfigError naming the field path (``TrainConfig.ppo.epochs: expected an integer, got 2.5``) of the first
+    value in ``data`` whose type is not the one the frozen config dataclass ``cls`` declares, recursing into
+    nested configs; a non-mapping is an error too. Unknown keys are left to ``np_sim.config.config_from_dict``."""
+    path = cls.__name__ if path is None else path
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: expected a mapping (a JSON object), got {type(data).__name__}")
+    hints = typing.get_type_hints(cls)
+    for name, value in data.items():
+        hint = hints.get(name)
+        if hint is None:
+            continue
+        if dataclasses.is_dataclass(hint):
+            check_types(hint, value, f"{path}.{name}")
+        elif not _matches(hint, value):
+            raise ConfigError(f"{path}.{name}: expected {_describe(hint)}, got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -115,7 +174,8 @@ class PPOConfig:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "PPOConfig":
-        """Inverse of ``to_dict``; unknown keys are a ConfigError."""
+        """Inverse of ``to_dict``; unknown keys and values of the wrong type are a ConfigError."""
+        check_types(cls, data)
         return config_from_dict(cls, data)
 
 
@@ -160,5 +220,6 @@ class NetworkConfig:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "NetworkConfig":
-        """Inverse of ``to_dict``; unknown keys are a ConfigError."""
+        """Inverse of ``to_dict``; unknown keys and values of the wrong type are a ConfigError."""
+        check_types(cls, data)
         return config_from_dict(cls, data)

@@ -27,12 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
-from np_policy.checkpoint import load_checkpoint
+from np_policy.checkpoint import load_checkpoint, load_weights
 from np_policy.inference import CompiledActor
 from np_policy.network import ActorCritic
 from np_policy.sampling import (FIRST_ARCS, ChoiceWeights, SampledRollouts, choose, clearance_level, end_reason,
                                 hermite_of)
-from np_policy.train import TrainConfig
+from np_policy.train import TrainConfig, check_benchmark_layout, checkpoint_config
 from np_sim.env import ParkingEnv
 from np_sim.plan import Plan
 from np_sim.scene import Scene
@@ -113,7 +113,8 @@ class NeuralParkerPlanner:
     def from_checkpoint(cls, path: str | Path, connector: str | None = None, samples: int = 0,
                         weights: ChoiceWeights | None = None, seed: int = 0,
                         rescue: Sequence[RescueRound] = (), margin_m: float = 0.0,
-                        action: str = "mean", rescue_clearance_m: float = 0.0) -> "NeuralParkerPlanner":
+                        action: str = "mean", rescue_clearance_m: float = 0.0,
+                        benchmark: str | None = None) -> "NeuralParkerPlanner":
         """Rebuild the network and env config stored in a checkpoint (CheckpointError on a bad file).
 
         ``connector`` ('fixed', 'ensemble' or 'centred', `np_sim.config.ConnectorConfig.variant`) replaces the
@@ -124,15 +125,19 @@ class NeuralParkerPlanner:
         real body. ``action``: 'mean' (the deterministic planner, default) or 'sample' (one rollout of sampled
         actions, `plan`). ``rescue_clearance_m``: the rescue rounds also run while the chosen plan's clearance
         level (`np_policy.sampling.clearance_level` on ``weights.margins_m``) is below this (m); 0 = only after
-        a failure."""
+        a failure. ``benchmark`` ('factorial', 'topology', 'examples', 'site'), when given, names the scenes it
+        will plan: a checkpoint of another observation layout is refused here, with both layouts named
+        (`np_policy.train.check_benchmark_layout`)."""
         payload = load_checkpoint(path)
-        config = TrainConfig.from_dict(payload["config"])
+        config = checkpoint_config(path, payload)
+        if benchmark is not None:
+            check_benchmark_layout(path, config, benchmark)
         if connector is not None:
             env = config.env
             env = dataclasses.replace(env, connector=env.connector.variant(connector))
             config = dataclasses.replace(config, env=env)
         model = ActorCritic(config.env.observation, config.network)
-        model.load_state_dict(payload["model"])
+        load_weights(model, payload["model"], path)
         return cls(model, config, samples=samples, weights=weights, seed=seed, rescue=rescue, margin_m=margin_m,
                    action=action, rescue_clearance_m=rescue_clearance_m)
 

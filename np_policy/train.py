@@ -17,7 +17,9 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import io
 import json
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,15 +29,16 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from np_policy.checkpoint import CheckpointError, check_config, config_differences, load_checkpoint, save_checkpoint
-from np_policy.config import NetworkConfig, PPOConfig
+from np_policy.checkpoint import (CheckpointError, check_config, check_layout, config_differences, load_checkpoint,
+                                  load_weights, save_checkpoint, write_atomic)
+from np_policy.config import NetworkConfig, PPOConfig, check_types
 from np_policy.network import ActorCritic, clip_action
 from np_policy.ppo import RunningMeanStd, compute_targets, make_optimizer, ppo_update, set_learning_rate
 from np_sim.config import EnvConfig, config_from_dict
 from np_sim.curriculum import CurriculumSchedule, CurriculumStartSampler
 from np_sim.env import ParkingVectorEnv
 from np_sim.clips import cached_training_pool, difficult_clips
-from np_sim.errors import ConfigError
+from np_sim.errors import ConfigError, NPSimError
 from np_sim.scene import Scene
 from np_sim.site import SITE_OBSERVATION
 from np_sim.starts import UniformStartSampler, fixed_start_sampler
@@ -44,6 +47,11 @@ BENCHMARKS = ("factorial", "topology", "examples", "site")
 CURRICULUM_REGIONS = ("start_region", "lot")
 SITE_POOL_FILE = "site_pool.pkl"
 """The site run's reset pool, kept in the run folder so --resume does not draw it again (not committed)."""
+RUN_FILES = ("metrics.jsonl", "snapshot.pt", "best.pt")
+"""A folder holding any of these holds a training run: a new run there needs ``overwrite``."""
+REPLACED_FILES = (*RUN_FILES, "curves.png", "config.json")
+"""What ``overwrite`` removes before a new run starts in an existing run folder (the site pool is a cache keyed by
+its settings and stays)."""
 
 
 @dataclass(frozen=True)
@@ -105,7 +113,9 @@ class TrainConfig:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "TrainConfig":
-        """Inverse of ``to_dict``; an unknown key anywhere is a ConfigError naming its field path."""
+        """Inverse of ``to_dict``; an unknown key or a value of the wrong type (2.5 for an int) anywhere is a
+        ConfigError naming its field path."""
+        check_types(cls, data)
         return config_from_dict(cls, data)
 
 
@@ -121,6 +131,28 @@ def benchmark_defaults(benchmark: str) -> dict[str, Any]:
     return {"benchmark": "site", "env": {"observation": dataclasses.asdict(SITE_OBSERVATION),
                                          "connector": {"mode": "fixed"}},
             "curriculum": {"enabled": False}}
+
+
+def checkpoint_config(path: str | Path, payload: dict[str, Any]) -> TrainConfig:
+    """The TrainConfig stored in a loaded checkpoint; CheckpointError naming ``path`` when it is not a valid one."""
+    try:
+        return TrainConfig.from_dict(payload["config"])
+    except ConfigError as exc:
+        raise CheckpointError(f"{path}: its stored config is not a valid TrainConfig: {exc}") from exc
+
+
+def benchmark_layout(benchmark: str) -> dict[str, Any]:
+    """The observation layout (``ObservationConfig`` as a dict) a policy needs to plan ``benchmark``'s scenes: the
+    site's (App. C) for 'site', the paper's default for the Factorial, Topology-Stress and example scenes."""
+    defaults = TrainConfig.from_dict(benchmark_defaults(benchmark) if benchmark == "site" else {})
+    return dataclasses.asdict(defaults.env.observation)
+
+
+def check_benchmark_layout(path: str | Path, config: TrainConfig, benchmark: str) -> None:
+    """CheckpointError naming ``path`` and both layouts when the checkpoint trained under ``config`` reads another
+    observation layout than ``benchmark``'s scenes need (e.g. a site checkpoint for the Factorial scenes)."""
+    check_layout(path, dataclasses.asdict(config.env.observation), benchmark_layout(benchmark),
+                 f"trained on {config.benchmark!r}", f"benchmark {benchmark!r}")
 
 
 def merge_config(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
@@ -329,10 +361,14 @@ class Trainer:
             "curriculum_fraction": self.sampler.fraction, "init_checkpoint": self.init_checkpoint,
         }
 
-    def restore(self, payload: dict[str, Any]) -> None:
-        """Inverse of ``state``."""
-        self.model.load_state_dict(payload["model"])
-        self.optimizer.load_state_dict(payload["optimizer"])
+    def restore(self, payload: dict[str, Any], path: str | Path = "snapshot") -> None:
+        """Inverse of ``state``; ``path`` (the snapshot) names the file in a CheckpointError when the weights or
+        the optimiser state do not fit this run's network."""
+        load_weights(self.model, payload["model"], path)
+        try:
+            self.optimizer.load_state_dict(payload["optimizer"])
+        except (KeyError, TypeError, ValueError, RuntimeError) as exc:
+            raise CheckpointError(f"{path}: its optimiser state does not fit this run's network: {exc}") from exc
         self.return_rms.load_state_dict(payload["return_rms"])
         self.epoch, self.updates, self.env_steps = payload["epoch"], payload["updates"], payload["env_steps"]
         self.best_reward = payload["best_reward"]
@@ -359,7 +395,7 @@ class Trainer:
         if diffs:
             raise CheckpointError(f"{path}: cannot initialise from it, its network input differs:\n  "
                                   + "\n  ".join(diffs))
-        self.model.load_state_dict(payload["model"])
+        load_weights(self.model, payload["model"], path)
         self.return_rms.load_state_dict(payload["return_rms"])
         self.init_checkpoint = {"path": str(path), "epoch": payload.get("epoch"), "config": payload["config"]}
 
@@ -383,70 +419,148 @@ def _plot_curves(rows: list[dict[str, Any]], path: Path, selection_episodes: int
         ax.set_xlabel("epoch")
         ax.set_title(label, fontsize="small")
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=100)
+    write_atomic(path, buffer.getvalue())
+
+
+def write_metrics(path: Path, rows: list[dict[str, Any]]) -> None:
+    """``metrics.jsonl`` holding ``rows``, one JSON object a line, written atomically (`write_atomic`): a crash
+    leaves the previous file whole."""
+    write_atomic(path, "".join(json.dumps(r) + "\n" for r in rows).encode())
+
+
+def read_metrics(path: Path) -> list[dict[str, Any]]:
+    """The rows of ``metrics.jsonl``. A torn last line (a crash in the middle of a write by an older version) is
+    discarded with a warning on stderr; a bad line elsewhere is a CheckpointError naming the file and line."""
+    if not path.exists():
+        return []
+    lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+    rows = []
+    for number, line in enumerate(lines, 1):
+        if not line.strip():
+            continue
+        try:
+            row = json.loads(line)
+            if not isinstance(row, dict) or not isinstance(row.get("epoch"), int):
+                raise ValueError("not an object with an integer 'epoch'")
+        except ValueError as exc:
+            if any(rest.strip() for rest in lines[number:]):
+                raise CheckpointError(f"{path}: line {number} is not a metrics row ({exc})") from exc
+            print(f"warning: {path}: discarding its torn last line {number} ({exc})", file=sys.stderr)
+            continue
+        rows.append(row)
+    return rows
+
+
+def prepare_run_folder(out: Path, resume: bool, overwrite: bool) -> None:
+    """Refuse to start a new run where one exists (ConfigError naming the folder and its run files) unless
+    ``resume`` (continue it) or ``overwrite`` (its run files are removed first); nothing is written or removed
+    before the check."""
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"{out}: expected a run folder, found a file")
+    if resume and overwrite:
+        raise ConfigError("train: --resume continues the run in the folder, --overwrite replaces it — give one")
+    found = [name for name in RUN_FILES if (out / name).exists()]
+    if resume:
+        if not (out / "snapshot.pt").exists():
+            raise ConfigError(f"{out}: nothing to resume, no snapshot.pt in it")
+    elif found and not overwrite:
+        raise ConfigError(f"{out}: already holds a training run ({', '.join(found)}); pass --resume to continue "
+                          "it, --overwrite to replace it, or another --out")
+    elif found:
+        for name in REPLACED_FILES:
+            (out / name).unlink(missing_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
+
+
+def check_epochs(epochs: Any, ppo: PPOConfig) -> int:
+    """``epochs`` (None: the recipe's) as the last epoch to train: an integer in 1..``ppo.epochs``, else a
+    ConfigError saying why (the learning-rate schedule and the curriculum end at ``ppo.epochs``)."""
+    if epochs is None:
+        return ppo.epochs
+    if isinstance(epochs, bool) or not isinstance(epochs, int) or not 1 <= epochs <= ppo.epochs:
+        raise ConfigError(f"train: --epochs: expected an integer from 1 to ppo.epochs={ppo.epochs} (the last epoch "
+                          f"to train; the learning-rate schedule and the curriculum end at ppo.epochs, set it in "
+                          f"--config to train longer), got {epochs!r}")
+    return epochs
+
+
+def _resume(trainer: Trainer, config: TrainConfig, out: Path, last: int) -> list[dict[str, Any]]:
+    """Restore ``trainer`` from ``out/snapshot.pt`` and return the metrics rows up to its epoch."""
+    snapshot = out / "snapshot.pt"
+    payload = load_checkpoint(snapshot)
+    # a field added to TrainConfig after the run started is stored without it: compare with its default
+    check_config(snapshot, config.to_dict(), checkpoint_config(snapshot, payload).to_dict())
+    trainer.restore(payload, snapshot)
+    if last < trainer.epoch:
+        raise ConfigError(f"train: --epochs {last}: the snapshot is already at epoch {trainer.epoch}")
+    return [r for r in read_metrics(out / "metrics.jsonl") if r["epoch"] <= trainer.epoch]
+
+
+def _train_epoch(trainer: Trainer) -> dict[str, Any]:
+    """Collect and update until ``steps_per_epoch`` steps are in, then score selection; the epoch's metrics row."""
+    ppo = trainer.config.ppo
+    trainer.sampler.set_progress(trainer.epoch / ppo.epochs, trainer.config.curriculum)
+    t0 = time.perf_counter()
+    steps0 = trainer.env_steps
+    returns, successes, stats = [], [], {}
+    seconds = dict.fromkeys(("collect_s", "update_s", "selection_s"), 0.0)
+    while trainer.env_steps - steps0 < ppo.steps_per_epoch:
+        t_phase = time.perf_counter()
+        roll = trainer.collect()
+        returns += roll["ended_returns"]
+        successes += roll["ended_success"]
+        t_update = time.perf_counter()
+        stats = trainer.update(roll)
+        seconds["collect_s"] += t_update - t_phase
+        seconds["update_s"] += time.perf_counter() - t_update
+    trainer.epoch += 1
+    t_phase = time.perf_counter()
+    selection, selection_success = trainer.selection_reward()
+    seconds["selection_s"] = time.perf_counter() - t_phase
+    elapsed = time.perf_counter() - t0
+    return {"epoch": trainer.epoch, "env_steps": trainer.env_steps,
+            "steps_per_s": (trainer.env_steps - steps0) / elapsed, "epoch_s": elapsed, **seconds,
+            "train_return": float(np.mean(returns)) if returns else float("nan"),
+            "train_success": float(np.mean(successes)) if successes else float("nan"),
+            "episodes": len(returns), "curriculum_fraction": trainer.sampler.fraction,
+            "selection_reward": selection, "selection_success": selection_success, **stats}
 
 
 def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resume: bool = False,
-          progress: bool = True, init: str | Path | None = None) -> list[dict[str, Any]]:
+          progress: bool = True, init: str | Path | None = None, overwrite: bool = False) -> list[dict[str, Any]]:
     """Run (or resume) training up to ``epochs`` (default: the config's); returns the metrics rows. ``init``
-    warm-starts a new run from another checkpoint's weights (``Trainer.initialize_from``)."""
+    warm-starts a new run from another checkpoint's weights (``Trainer.initialize_from``). A folder that already
+    holds a run is refused unless ``resume`` or ``overwrite`` (`prepare_run_folder`); every file is written
+    atomically."""
     if init is not None and resume:
         raise ConfigError("train: --init starts a new run from another checkpoint; --resume continues this run's "
                           "snapshot — give one of them")
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    last = check_epochs(epochs, config.ppo)
+    prepare_run_folder(out, resume, overwrite)
     trainer = Trainer(config, out)
     metrics_path = out / "metrics.jsonl"
     rows: list[dict[str, Any]] = []
     if resume:
-        snapshot = out / "snapshot.pt"
-        payload = load_checkpoint(snapshot)
-        # a field added to TrainConfig after the run started is stored without it: compare with its default
-        check_config(snapshot, config.to_dict(), TrainConfig.from_dict(payload["config"]).to_dict())
-        trainer.restore(payload)
-        if metrics_path.exists():
-            rows = [json.loads(line) for line in metrics_path.read_text().splitlines() if line.strip()]
-            rows = [r for r in rows if r["epoch"] <= trainer.epoch]
+        rows = _resume(trainer, config, out, last)
+        if trainer.epoch == last:
+            return rows
     elif init is not None:
         trainer.initialize_from(init)
-    (out / "config.json").write_text(json.dumps(config.to_dict(), indent=2))
-    metrics_path.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    write_atomic(out / "config.json", json.dumps(config.to_dict(), indent=2).encode())
+    write_metrics(metrics_path, rows)
     ppo = config.ppo
-    last = ppo.epochs if epochs is None else int(epochs)
     bar = tqdm(range(trainer.epoch, last), desc="epochs", unit="epoch", disable=not progress,
                initial=trainer.epoch, total=last)
     for _ in bar:
-        trainer.sampler.set_progress(trainer.epoch / ppo.epochs, config.curriculum)
-        t0 = time.perf_counter()
-        steps0 = trainer.env_steps
-        returns, successes, stats = [], [], {}
-        seconds = dict.fromkeys(("collect_s", "update_s", "selection_s"), 0.0)
-        while trainer.env_steps - steps0 < ppo.steps_per_epoch:
-            t_phase = time.perf_counter()
-            roll = trainer.collect()
-            returns += roll["ended_returns"]
-            successes += roll["ended_success"]
-            t_update = time.perf_counter()
-            stats = trainer.update(roll)
-            seconds["collect_s"] += t_update - t_phase
-            seconds["update_s"] += time.perf_counter() - t_update
-        trainer.epoch += 1
-        t_phase = time.perf_counter()
-        selection, selection_success = trainer.selection_reward()
-        seconds["selection_s"] = time.perf_counter() - t_phase
-        elapsed = time.perf_counter() - t0
-        row = {"epoch": trainer.epoch, "env_steps": trainer.env_steps,
-               "steps_per_s": (trainer.env_steps - steps0) / elapsed, "epoch_s": elapsed, **seconds,
-               "train_return": float(np.mean(returns)) if returns else float("nan"),
-               "train_success": float(np.mean(successes)) if successes else float("nan"),
-               "episodes": len(returns), "curriculum_fraction": trainer.sampler.fraction,
-               "selection_reward": selection, "selection_success": selection_success, **stats}
+        row = _train_epoch(trainer)
         rows.append(row)
-        with metrics_path.open("a") as fh:
-            fh.write(json.dumps(row) + "\n")
-        if selection > trainer.best_reward:
-            trainer.best_reward = selection
-            save_checkpoint(out / "best.pt", trainer.checkpoint_payload(selection))
+        write_metrics(metrics_path, rows)
+        if row["selection_reward"] > trainer.best_reward:
+            trainer.best_reward = row["selection_reward"]
+            save_checkpoint(out / "best.pt", trainer.checkpoint_payload(row["selection_reward"]))
         if trainer.epoch % ppo.snapshot_every_epochs == 0 or trainer.epoch == last:
             save_checkpoint(out / "snapshot.pt", trainer.state())
         _plot_curves(rows, out / "curves.png", ppo.selection_episodes)
@@ -455,35 +569,52 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
     return rows
 
 
+def _fail(message: str) -> SystemExit:
+    """Print ``error: message`` to stderr; the SystemExit (status 2) to raise."""
+    print(f"error: {message}", file=sys.stderr)
+    return SystemExit(2)
+
+
+def _read_overrides(path: Path | None) -> dict[str, Any]:
+    """The JSON object in the ``--config`` file (empty without one); SystemExit(2) with one error line otherwise."""
+    if path is None:
+        return {}
+    try:
+        overrides = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
+        raise _fail(f"{path}: not a readable JSON file ({exc})")
+    if not isinstance(overrides, dict):
+        raise _fail(f"{path}: expected a JSON object of TrainConfig fields, got a {type(overrides).__name__}")
+    return overrides
+
+
 def main(argv=None) -> list[dict[str, Any]]:
+    """Command line of ``train``; a user's mistake is one ``error:`` line on stderr and exit status 2."""
     parser = argparse.ArgumentParser(prog="python -m np_policy.train", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--benchmark", default="factorial",
                         help=f"training scenes: one of {', '.join(BENCHMARKS)}, or a scene JSON file or folder")
     parser.add_argument("--seed", type=int, default=0, help="training seed")
     parser.add_argument("--config", type=Path, help="JSON file with TrainConfig fields overriding the defaults "
-                        "(nested: env, ppo, network, curriculum); unknown keys are errors")
-    parser.add_argument("--epochs", type=int, help="stop after this epoch (default: ppo.epochs); the LR schedule "
-                        "and curriculum still follow ppo.epochs")
-    parser.add_argument("--out", type=Path, help="run folder (default: results/train/<benchmark>_seed<N>)")
+                        "(nested: env, ppo, network, curriculum); unknown keys and wrong types are errors")
+    parser.add_argument("--epochs", type=int, help="stop after this epoch, 1..ppo.epochs (default: ppo.epochs); "
+                        "the LR schedule and curriculum still follow ppo.epochs")
+    parser.add_argument("--out", type=Path, help="run folder (default: results/train/<benchmark>_seed<N>); a folder "
+                        "that already holds a run is refused without --resume or --overwrite")
     parser.add_argument("--resume", action="store_true", help="continue from <out>/snapshot.pt")
+    parser.add_argument("--overwrite", action="store_true", help="replace the run in --out (its metrics, "
+                        "curves and checkpoints are deleted)")
     parser.add_argument("--init", type=Path, help="start a new run from this checkpoint's weights (same observation "
                         "and network config; e.g. the footprint variant from the reference-point site checkpoint)")
     args = parser.parse_args(argv)
-    overrides: dict[str, Any] = {}
-    if args.config is not None:
-        try:
-            overrides = json.loads(args.config.read_text())
-        except (OSError, json.JSONDecodeError) as exc:
-            raise SystemExit(f"error: {args.config}: {exc}")
-    data = merge_config(benchmark_defaults(args.benchmark), overrides)
+    data = merge_config(benchmark_defaults(args.benchmark), _read_overrides(args.config))
     data.update(benchmark=args.benchmark, seed=args.seed)
-    config = TrainConfig.from_dict(data)
-    out = args.out or Path("results/train") / f"{config.benchmark}_seed{config.seed}"
     try:
-        rows = train(config, out, epochs=args.epochs, resume=args.resume, init=args.init)
-    except (CheckpointError, ConfigError) as exc:
-        raise SystemExit(f"error: {exc}")
+        config = TrainConfig.from_dict(data)
+        out = args.out or Path("results/train") / f"{config.benchmark}_seed{config.seed}"
+        rows = train(config, out, epochs=args.epochs, resume=args.resume, init=args.init, overwrite=args.overwrite)
+    except NPSimError as exc:  # the project's own errors (checkpoint, config, scene) are the user's to fix
+        raise _fail(str(exc)) from None
     print(f"{len(rows)} epochs in {out}: metrics.jsonl, curves.png, best.pt, snapshot.pt")
     return rows
 

@@ -5,7 +5,7 @@ import json
 import pytest
 import torch
 
-from np_policy.checkpoint import CheckpointError, load_checkpoint
+from np_policy.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
 from np_policy.train import TrainConfig, Trainer, benchmark_defaults, main, train
 from np_sim.errors import ConfigError
 
@@ -43,11 +43,11 @@ def test_a_run_resumes_after_a_field_with_a_default_was_added_to_the_config(tmp_
     payload = load_checkpoint(snapshot)
     for key in ("site_recorded_share", "site_recorded_skip"):  # as a snapshot written before these fields existed
         del payload["config"][key]
-    torch.save(payload, snapshot)
+    save_checkpoint(snapshot, payload)
     rows = train(config, tmp_path / "run", resume=True, progress=False)
     assert [r["epoch"] for r in rows] == [1, 2, 3, 4]
     payload["config"]["seed"] = 4  # a real difference still stops the resume
-    torch.save(payload, snapshot)
+    save_checkpoint(snapshot, payload)
     with pytest.raises(CheckpointError, match="seed: checkpoint has 4, expected 3"):
         train(config, tmp_path / "run", resume=True, progress=False)
 
