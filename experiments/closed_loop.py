@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import git_commit, run_folder, write_records
+from experiments.common import first, git_commit, run_folder, write_records
 from np_sim.cli import cli_boundary, fresh_folder, non_negative_float, non_negative_int, positive_int
 from np_sim.config import CONNECTOR_VARIANTS
 from np_sim.errors import ConfigError
@@ -141,7 +141,7 @@ def build_planners(names: list[str], settings: PlannerSettings) -> dict[str, Any
                 f"checkpoints/runs/site_np_seed0/best.pt) or leave neuralparker and np_guided_astar out of --planners")
         from np_policy.planner import NeuralParkerPlanner
 
-        learned = NeuralParkerPlanner.from_checkpoint(settings.checkpoint, settings.connector)
+        learned = NeuralParkerPlanner.from_checkpoint(settings.checkpoint, settings.connector, benchmark="site")
     if "neuralparker_footprint" in names and not Path(settings.footprint_checkpoint).exists():
         raise FileNotFoundError(
             f"experiments.closed_loop: the footprint-aware site checkpoint {settings.footprint_checkpoint} does not "
@@ -161,7 +161,7 @@ def build_planners(names: list[str], settings: PlannerSettings) -> dict[str, Any
             planners[name] = NeuralParkerPlanner.from_checkpoint(
                 settings.footprint_checkpoint, settings.footprint_connector, samples=settings.footprint_samples,
                 rescue=settings.footprint_rescue, margin_m=settings.footprint_margin_m,
-                rescue_clearance_m=settings.footprint_rescue_clearance_m)
+                rescue_clearance_m=settings.footprint_rescue_clearance_m, benchmark="site")
     return planners
 
 
@@ -281,7 +281,7 @@ def run(planners: list[str] | None = None, settings: PlannerSettings | None = No
             raise ConfigError(f"--clip-names: {missing} are not {split} clips ({clips[0].name} … {clips[-1].name})")
         indices = [known[n] for n in clip_names]
     else:
-        indices = list(range(len(clips)))[:clips_limit]
+        indices = first(list(range(len(clips))), clips_limit, "--clips-limit")
     folder = run_folder("closed_loop", out)
     rrd_dir = folder / "rrd" if rrd else None
     jobs = [(k, controller, rrd_dir, render and n < render_clips, clip_config) for n, k in enumerate(indices)]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import numbers
 import subprocess
 import time
 from pathlib import Path
@@ -35,6 +36,14 @@ def run_folder(experiment: str, out: Path | None) -> Path:
         except FileExistsError:
             n += 1
             folder = stamp.with_name(f"{stamp.name}-{n}")
+
+
+def first(items: list, limit: int | None, name: str = "--limit") -> list:
+    """The first ``limit`` items (all of them for None); ConfigError for a limit that is not a positive integer (a
+    negative slice would silently drop the last items instead)."""
+    if limit is not None and (isinstance(limit, bool) or not isinstance(limit, numbers.Integral) or limit < 1):
+        raise ConfigError(f"{name}: expected a positive integer (or none for all), got {limit!r}")
+    return items[:limit]
 
 
 def git_commit() -> str:

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import git_commit, mean_sd, run_folder, write_records
+from experiments.common import first, git_commit, mean_sd, run_folder, write_records
 from np_policy.planner import ACTIONS, NeuralParkerPlanner
 from np_sim.benchmarks import frozen_starts, load_benchmark
 from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int
@@ -39,12 +39,12 @@ def evaluate(benchmark: str, checkpoints: list[Path], connector: str | None = No
     the table text."""
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
+    episodes = first([(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])], limit)
     folder = run_folder("evaluate", out)
-    episodes = [(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])][:limit]
     records: list[dict[str, Any]] = []
     for seed_index, path in enumerate(checkpoints):
         planner = NeuralParkerPlanner.from_checkpoint(path, connector, samples=samples, seed=action_seed,
-                                                      action=action)
+                                                      action=action, benchmark=benchmark)
         method = (f"NeuralParker, best of 1 + {samples}" if samples else
                   f"NeuralParker, sampled actions (seed {action_seed})" if action == "sample" else "NeuralParker")
         for k, j in tqdm(episodes, desc=f"{Path(path).name}", unit="ep", disable=not progress):

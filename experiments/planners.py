@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import git_commit, run_folder, write_records
+from experiments.common import first, git_commit, run_folder, write_records
 from np_sim.benchmarks import frozen_starts, load_benchmark
 from np_sim.cli import cli_boundary, fresh_folder, non_negative_int, positive_int
 from np_sim.planners import HybridAStar
@@ -36,8 +36,10 @@ LEARNED = {"np_guided_astar", "neuralparker", "staged_astar_np"}
 DEFAULT_CHECKPOINT = Path("checkpoints/factorial_np_seed0.pt")
 
 
-def build_planners(methods: list[str], checkpoint: Path | None, convention: str, ompl_seed: int) -> dict[str, Any]:
-    """One planner object per method name (learned ones share one policy)."""
+def build_planners(methods: list[str], checkpoint: Path | None, convention: str, ompl_seed: int,
+                   benchmark: str | None = None) -> dict[str, Any]:
+    """One planner object per method name (learned ones share one policy; with ``benchmark``, a checkpoint of
+    another observation layout than its scenes need is refused up front)."""
     unknown = [m for m in methods if m not in METHODS]
     if unknown:
         raise ValueError(f"experiments.planners: unknown method(s) {unknown}; expected some of {list(METHODS)}")
@@ -51,7 +53,7 @@ def build_planners(methods: list[str], checkpoint: Path | None, convention: str,
         from np_policy.planner import NeuralParkerPlanner
         from np_policy.staged import NPGuidedAStar, StagedPlanner
 
-        learned = NeuralParkerPlanner.from_checkpoint(checkpoint)
+        learned = NeuralParkerPlanner.from_checkpoint(checkpoint, benchmark=benchmark)
     for method in methods:
         if method == "hybrid_astar":
             planners[method] = search
@@ -74,11 +76,11 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
         progress: bool = True) -> dict[str, Any]:
     """Plan every frozen start with every method; returns the records, the table text and the run folder."""
     methods = list(METHODS if methods is None else methods)
-    planners = build_planners(methods, checkpoint, convention, ompl_seed)
+    planners = build_planners(methods, checkpoint, convention, ompl_seed, benchmark)
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
+    episodes = first([(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])], limit)
     folder = run_folder("planners", out)
-    episodes = [(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])][:limit]
     records: list[dict[str, Any]] = []
     for k, j in tqdm(episodes, desc=f"planners/{benchmark}", unit="ep", disable=not progress):
         for method in methods:

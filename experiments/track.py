@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import git_commit, run_folder, write_records
+from experiments.common import first, git_commit, run_folder, write_records
 from np_sim.benchmarks import frozen_starts, load_benchmark
 from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int
 from np_sim.errors import ConfigError
@@ -37,8 +37,9 @@ PLANNERS = ("hybrid_astar", "neuralparker")
 """Planners this experiment can run."""
 
 
-def make_planner(name: str, convention: str, checkpoint: Path | None):
-    """The planner called ``name`` (imported here, so the experiment loads only what it runs)."""
+def make_planner(name: str, convention: str, checkpoint: Path | None, benchmark: str | None = None):
+    """The planner called ``name`` (imported here, so the experiment loads only what it runs); ``benchmark``
+    names the scenes it will plan (a checkpoint of another observation layout is refused up front)."""
     if name == "hybrid_astar":
         from np_sim.planners import HybridAStar
 
@@ -49,7 +50,7 @@ def make_planner(name: str, convention: str, checkpoint: Path | None):
         if checkpoint is None:
             raise ConfigError("--planner neuralparker needs --checkpoint PATH (e.g. "
                               "checkpoints/factorial_np_seed0.pt)")
-        return NeuralParkerPlanner.from_checkpoint(checkpoint)
+        return NeuralParkerPlanner.from_checkpoint(checkpoint, benchmark=benchmark)
     raise ConfigError(f"--planner: expected one of {PLANNERS}, got {name!r}")
 
 
@@ -64,10 +65,10 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
             raise ConfigError(f"--controller: expected one of {sorted(CONTROLLERS)} or 'all', got {c!r}")
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
-    source = make_planner(planner, convention, checkpoint)
+    source = make_planner(planner, convention, checkpoint, benchmark)
+    per_scene = len(first(range(starts.shape[1]), per_scene, "--per-scene"))
+    episodes = first([(k, j) for k in range(len(scenes)) for j in range(per_scene)], limit)
     folder = run_folder("track", out)
-    per_scene = starts.shape[1] if per_scene is None else min(per_scene, starts.shape[1])
-    episodes = [(k, j) for k in range(len(scenes)) for j in range(per_scene)][:limit]
     records: list[dict[str, Any]] = []
     for n, (k, j) in enumerate(tqdm(episodes, desc=f"{planner} → MuJoCo", unit="ep", disable=not progress)):
         scene = scenes[k]

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from experiments import closed_loop, evaluate, planners, track
-from experiments.common import run_folder
+from experiments.common import first, run_folder
 from np_policy import bench_planner, bench_update
 from np_sim.errors import ConfigError
 from tracking import bench as tracking_bench
@@ -139,6 +139,21 @@ def test_run_folder_makes_a_fresh_folder_every_time(tmp_path, monkeypatch):
     with pytest.raises(ConfigError, match="--out: .* exists and is not empty"):
         run_folder("evaluate", first)
     assert (first / "records.csv").read_text() == "kept\n"
+
+
+def test_a_limit_below_one_is_refused_by_the_functions_too(tmp_path):
+    """`[:limit]` with a negative limit silently drops the last episodes; the experiment functions refuse it."""
+    assert first([1, 2, 3], 2) == [1, 2] and first([1, 2, 3], None) == [1, 2, 3] and first([1, 2, 3], 9) == [1, 2, 3]
+    for bad in (-2, 0, 2.5, True):
+        with pytest.raises(ConfigError, match=f"--limit: expected a positive integer .*got {bad!r}"):
+            first([1, 2, 3], bad)
+    with pytest.raises(ConfigError, match="--limit: expected a positive integer"):
+        evaluate.evaluate("factorial", [CHECKPOINT], out=tmp_path / "evaluate", limit=-2)
+    with pytest.raises(ConfigError, match="--per-scene: expected a positive integer"):
+        track.track(per_scene=-1, out=tmp_path / "track")
+    with pytest.raises(ConfigError, match="--clips-limit: expected a positive integer"):
+        closed_loop.run(["hybrid_astar"], clips_limit=-1, out=tmp_path / "closed_loop")
+    assert not any(tmp_path.iterdir())  # refused before a run folder was made
 
 
 def test_closed_loop_merges_only_the_recordings_it_names(tmp_path):
