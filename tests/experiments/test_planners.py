@@ -13,11 +13,11 @@ import pytest
 
 from experiments.planners import DEFAULT_CHECKPOINT, METHODS, main
 from np_policy.staged import NPGuidedAStar, StagedPlan, StagedPlanner
-from np_sim.collision import path_valid
 from np_sim.kinematics import arc_step
 from np_sim.metrics import plan_metrics
 from np_sim.plan import HermiteSegment
 from np_sim.scene import Scene
+from shapely.geometry import Point, Polygon
 
 needs_checkpoint = pytest.mark.skipif(not DEFAULT_CHECKPOINT.exists(), reason="no shipped NeuralParker checkpoint")
 
@@ -39,6 +39,22 @@ def _pocket_scene() -> Scene:
         "target": [20.0, 12.5, math.pi / 2]})
 
 
+def _assert_free_by_the_paper_rule(scene: Scene, plan) -> None:
+    """Shapely re-check of the rule plans are scored by, written without the planners' checkers: the reference
+    point at 30 evenly spaced points of every arc (eq:arc via arc_step) and at every point of the Hermite segment
+    lies strictly inside the boundary and outside every obstacle, and the path ends within 0.1 m of the target."""
+    points, pose = [np.asarray(plan.start, float)[:2]], np.asarray(plan.start, float)
+    for kappa, length in plan.arcs:
+        points += [arc_step(pose, kappa, length * j / 30)[:2] for j in range(1, 31)]
+        pose = arc_step(pose, kappa, length)
+    if plan.hermite is not None:
+        assert np.allclose(plan.hermite.points[0], pose[:2], atol=1e-6)
+        points += list(plan.hermite.points)
+    lot, walls = Polygon(scene.boundary), [Polygon(o.vertices) for o in scene.obstacles]
+    assert all(lot.contains(Point(q)) and not any(w.intersects(Point(q)) for w in walls) for q in points)
+    assert math.hypot(*(points[-1] - scene.target[:2])) <= 0.1 + 1e-9  # SPEC §2 tolerance, its edge included
+
+
 def test_staged_metrics_exclude_the_handoff_jump():
     arcs = np.array([[0.68, 1.0], [0.0, 1.0], [-0.5, -2.0], [0.2, -1.0], [0.1, 3.0]])
     hermite = HermiteSegment(points=np.zeros((2, 2)), forward=False, length=1.5, delta_kappa=0.4)
@@ -56,7 +72,7 @@ def test_guided_search_succeeds_where_the_policy_may_not(learned):
     guided = NPGuidedAStar(learned)
     plan = guided.plan(scene, start)
     assert plan.success, plan.reason
-    assert path_valid(scene, plan.sample(guided.search.config.check_spacing_m)[:, :3])
+    _assert_free_by_the_paper_rule(scene, plan)
     assert 0 < plan.guide_time_s < plan.plan_time_s
 
 
@@ -70,7 +86,8 @@ def test_staged_hands_over_within_the_radius(learned):
     for kappa, length in plan.arcs[: plan.handoff_index]:
         handoff = arc_step(handoff, kappa, length)
     assert math.hypot(*(handoff[:2] - scene.target[:2])) <= 10.0
-    assert plan.success or plan.reason.startswith("downstream: ")
+    assert plan.success, plan.reason  # the shipped policy parks from this hand-off (a fixed checkpoint and scene)
+    _assert_free_by_the_paper_rule(scene, plan)
 
 
 @needs_checkpoint
