@@ -2,8 +2,8 @@
 [--convention reference_point|footprint] [--episodes N] [--ompl-episodes M] [--json]``.
 
 * Hybrid A* on the frozen test starts (all of them, or a seeded subset of N): success, plan time median / p90 and
-  expanded nodes median, every returned path re-checked with ``path_valid`` (the first query of a scene includes
-  building its heuristic grid; one warm-up query loads the compiled kernels first);
+  expanded nodes median, every returned path re-checked with the rule it is scored by (``np_sim.validate``; the
+  first query of a scene includes building its heuristic grid; one warm-up query loads the compiled kernels first);
 * the OMPL peer (RRT*, same time budget) and Hybrid A* on the same seeded subset of M starts: success and tree
   vertices.
 
@@ -23,8 +23,8 @@ import numpy as np
 
 from np_sim.benchmarks import frozen_starts, load_benchmark
 from np_sim.cli import cli_boundary, non_negative_int, positive_int
-from np_sim.collision import path_valid
 from np_sim.planners.hybrid_astar import HybridAStar
+from np_sim.validate import plan_valid, scoring_rule
 
 
 def _episodes(n_scenes: int, n_starts: int, count: int | None, rng: np.random.Generator) -> list[tuple[int, int]]:
@@ -52,8 +52,7 @@ def bench(benchmark: str = "factorial", convention: str = "reference_point", epi
     HybridAStar(convention=convention).plan(scenes[0], starts[0, 0])  # load the compiled kernels
     chosen = _episodes(len(scenes), starts.shape[1], episodes, rng)
     plans = [search.plan(scenes[k], starts[k, j]) for k, j in chosen]
-    valid = [p.success and path_valid(scenes[k], p.sample(search.config.check_spacing_m)[:, :3], convention)
-             for p, (k, j) in zip(plans, chosen)]
+    valid = [plan_valid(scenes[k], p, scoring_rule(convention)) for p, (k, j) in zip(plans, chosen)]
     result = {"benchmark": benchmark, "convention": convention, "hybrid_astar": _summary(plans, valid),
               "time_budget_s": search.config.time_budget_s}
     if ompl_episodes > 0:
@@ -62,8 +61,7 @@ def bench(benchmark: str = "factorial", convention: str = "reference_point", epi
         peer = OmplPeer(OmplPeerConfig(time_budget_s=search.config.time_budget_s, seed=seed), convention)
         subset = _episodes(len(scenes), starts.shape[1], ompl_episodes, rng)
         o_plans = [peer.plan(scenes[k], starts[k, j]) for k, j in subset]
-        o_valid = [p.success and path_valid(scenes[k], p.sample(search.config.check_spacing_m)[:, :3], convention)
-                   for p, (k, j) in zip(o_plans, subset)]
+        o_valid = [plan_valid(scenes[k], p, scoring_rule(convention)) for p, (k, j) in zip(o_plans, subset)]
         h_plans = [search.plan(scenes[k], starts[k, j]) for k, j in subset]
         result["ompl_subset"] = {"ompl_rrtstar": _summary(o_plans, o_valid),
                                  "hybrid_astar": _summary(h_plans, [p.success for p in h_plans])}

@@ -9,8 +9,11 @@ adds ``guide_weight`` × min(its distance to that polyline, ``guide_cap_m``) (NP
 and feasibility tests do not. ``plan_to_region`` stops at the first node within a radius of the target (the
 region goal of the staged planner, paper Table ``tab:twostage``).
 
-Every returned arc is valid at the poses ``Plan.sample(config.check_spacing_m)`` yields, under the convention
-the planner was built with. The compiled loop is ``np_sim.planners.search_kernels``.
+Every expanded arc and Reeds–Shepp piece is checked by the rule the plan is scored by (``np_sim.validate``): the
+paper's ``samples_per_arc`` reference points per arc under the reference-point convention, the footprint swept
+exactly (which implies the sampled footprint rule) under the footprint convention. A found plan is validated once
+more with those rules before it is claimed; one that fails becomes a failure with reason 'validation: …'. The
+compiled loop is ``np_sim.planners.search_kernels``.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from np_sim.config import Convention
+from np_sim.config import Convention, EpisodeConfig
 from np_sim.errors import CapacityError, ConfigError
 from np_sim.kernels.collision import poses_valid
 from np_sim.kernels.reeds_shepp import MAX_PIECES
@@ -32,6 +35,7 @@ from np_sim.planners import search_kernels as sk
 from np_sim.planners.heuristic import HolonomicGrid, holonomic_grid
 from np_sim.scene import Scene
 from np_sim.scene_arrays import packed_scene
+from np_sim.validate import scoring_rule, validate_plan
 from np_sim.vehicle import VehicleSpec
 
 
@@ -61,8 +65,9 @@ class HybridAStarConfig:
     """Weight on h in the priority f = g + w·h (> 1 trades optimality for fewer expansions)."""
     grid_cell_m: float = 0.25
     """Cell size of the holonomic-with-obstacles heuristic grid (m)."""
-    check_spacing_m: float = 0.1
-    """Largest spacing between the collision-checked poses along every arc (m)."""
+    samples_per_arc: int = EpisodeConfig.samples_per_arc
+    """Reference points checked along every arc under the reference-point convention: the paper's scoring rule
+    (the footprint convention sweeps each arc exactly)."""
     analytic_every: int = 5
     """Try the analytic Reeds–Shepp expansion at every n-th expansion ..."""
     analytic_near_m: float = 10.0
@@ -85,7 +90,7 @@ class HybridAStarConfig:
     """Most memory (bytes) one scene's lattice and heuristic grid may take; a larger scene is refused up front."""
 
     def __post_init__(self) -> None:
-        positive = ("xy_resolution_m", "step_m", "reverse_factor", "heuristic_weight", "grid_cell_m", "check_spacing_m",
+        positive = ("xy_resolution_m", "step_m", "reverse_factor", "heuristic_weight", "grid_cell_m",
                     "goal_tolerance_m", "goal_tolerance_deg", "time_budget_s")
         for name in positive:
             value = getattr(self, name)
@@ -96,7 +101,8 @@ class HybridAStarConfig:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ConfigError(f"HybridAStarConfig.{name}: expected a finite number >= 0, got {value!r}")
-        for name in ("heading_bins", "analytic_every", "max_expanded", "chunk_expansions", "max_lattice_bytes"):
+        for name in ("heading_bins", "analytic_every", "max_expanded", "chunk_expansions", "max_lattice_bytes",
+                     "samples_per_arc"):
             value = getattr(self, name)
             if not (isinstance(value, int) and value >= 1):
                 raise ConfigError(f"HybridAStarConfig.{name}: expected an integer >= 1, got {value!r}")
@@ -235,7 +241,7 @@ class HybridAStar:
         while status == sk.CHUNK_DONE:
             allowance = min(c.max_expanded, int(state[sk.S_EXPANDED]) + c.chunk_expansions)
             status, node = sk.expand(maps.geometry, footprint, self._local, goal, self._prims, self._costs,
-                                     c.vehicle.kappa_max, c.check_spacing_m, c.goal_tolerance_m,
+                                     c.vehicle.kappa_max, c.samples_per_arc, c.goal_tolerance_m,
                                      math.radians(c.goal_tolerance_deg), region_m, maps.lattice, maps.n_lattice,
                                      grid.distance, grid.origin, grid.cell_m, guide, c.guide_weight, c.guide_cap_m,
                                      c.analytic_every,
@@ -256,8 +262,21 @@ class HybridAStar:
         if status == sk.FOUND_ANALYTIC:
             arcs = np.concatenate([arcs, rs_out[: state[sk.S_N_RS]]])
         reason = "" if self._reached(p, arcs, goal, region_m) else "goal missed"
+        if not reason:
+            reason = self._validation_failure(scene, Plan(start=p, arcs=arcs, success=True))
         return Plan(start=p, arcs=arcs, success=reason == "", reason=reason, plan_time_s=time.perf_counter() - t0,
                     expanded_nodes=expanded)
+
+    def _validation_failure(self, scene: Scene, plan: Plan) -> str:
+        """'' when ``plan`` passes the rule it is scored by (and, footprint convention, the exact rule), else
+        'validation: ' and its first violation."""
+        rules = [scoring_rule(self.convention)] + (["exact"] if self.convention == "footprint" else [])
+        for rule in rules:
+            result = validate_plan(scene, plan, rule, convention=self.convention, vehicle=self.config.vehicle,
+                                   samples_per_arc=self.config.samples_per_arc)
+            if not result.valid:
+                return f"validation: {rule} rule, {result.violation.describe()}"
+        return ""
 
     def _reached(self, start: np.ndarray, arcs: np.ndarray, goal: np.ndarray, region_m: float) -> bool:
         """The arcs end within the goal tolerance (or the region), integrated with eq:arc."""

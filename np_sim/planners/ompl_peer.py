@@ -38,7 +38,7 @@ class OmplPeerConfig:
     """Footprint and curvature bound (κ_max) of the Reeds–Shepp space."""
     time_budget_s: float = HybridAStarConfig().time_budget_s
     """Wall time given to RRT* per query (s): the Hybrid A* budget."""
-    check_spacing_m: float = HybridAStarConfig().check_spacing_m
+    check_spacing_m: float = 0.1
     """Spacing of the validity checks along motions (m)."""
     goal_threshold_m: float = 0.05
     """OMPL goal threshold in Reeds–Shepp distance (m); ≤ 0.1 m keeps the end within 0.1 m and 10°."""

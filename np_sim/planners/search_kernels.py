@@ -11,8 +11,10 @@ Node priority f = g + w_h·h + w_g·d_guide, with
 * d_guide: distance from the node's position to a guide polyline, saturated at a cap (NP-Guided A*, paper §IV-B),
   0 without a guide.
 
-Every arc (primitive or analytic Reeds–Shepp piece) is checked at ⌈|l|/Δs⌉ evenly spaced poses along it (the
-same poses ``Plan.sample(Δs)`` yields) under the chosen collision convention. The search state lives in caller
+Every arc (primitive or analytic Reeds–Shepp piece) is checked by the rule its plan is scored by (``arc_scored``):
+under the reference-point convention the env's own check at the paper's n samples per arc (``arc_valid``), under
+the footprint convention the exact swept test of ``np_sim.kernels.swept``, which also implies the env's sampled
+footprint check. The search state lives in caller
 arrays so that ``expand`` can stop after a chunk of expansions and resume (time budget).
 """
 
@@ -26,6 +28,7 @@ from numba import njit
 from np_sim.kernels.collision import arc_valid
 from np_sim.kernels.kinematics import arc_point, wrap_angle
 from np_sim.kernels.reeds_shepp import rs_arcs_into, rs_length
+from np_sim.kernels.swept import EXACT_TOLERANCE_M, swept_arc_contact
 from np_sim.planners.heap import heap_pop, heap_push
 
 # status codes returned by ``expand``
@@ -50,6 +53,16 @@ def arc_checked(geo, x: float, y: float, th: float, kappa: float, length: float,
     """The arc (κ, l) from (x, y, θ) is valid at its ⌈|l|/Δs⌉ evenly spaced samples (end included)."""
     n = max(1, int(math.ceil(abs(length) / ds)))
     return arc_valid(geo, 0, x, y, th, kappa, length, n, footprint, local, corners)
+
+
+@njit(cache=True, error_model="numpy")
+def arc_scored(geo, x: float, y: float, th: float, kappa: float, length: float, n_samples: int, footprint: bool,
+               local: np.ndarray, corners: np.ndarray, hit: np.ndarray) -> bool:
+    """The arc (κ, l) from (x, y, θ) passes the rule its plan is scored by: the footprint swept exactly (footprint
+    convention; ``hit`` is scratch) or the reference point at ``n_samples`` poses (the paper's rule)."""
+    if footprint:
+        return swept_arc_contact(geo, 0, x, y, th, kappa, length, True, local, EXACT_TOLERANCE_M, hit) < 0.0
+    return arc_valid(geo, 0, x, y, th, kappa, length, n_samples, False, local, corners)
 
 
 @njit(cache=True, error_model="numpy")
@@ -105,14 +118,14 @@ def heuristic(x: float, y: float, th: float, gx: float, gy: float, gth: float, k
 
 
 @njit(cache=True, error_model="numpy")
-def rs_shot(geo, x: float, y: float, th: float, gx: float, gy: float, gth: float, kappa_max: float, ds: float,
-            footprint: bool, local: np.ndarray, corners: np.ndarray, rs_out: np.ndarray) -> int:
+def rs_shot(geo, x: float, y: float, th: float, gx: float, gy: float, gth: float, kappa_max: float, n_samples: int,
+            footprint: bool, local: np.ndarray, corners: np.ndarray, hit: np.ndarray, rs_out: np.ndarray) -> int:
     """Analytic expansion: the shortest Reeds–Shepp path to the goal, written to ``rs_out``; returns its arc count
-    when every arc is valid, −1 otherwise."""
+    when every arc passes ``arc_scored``, −1 otherwise."""
     n = rs_arcs_into(x, y, th, gx, gy, gth, kappa_max, 1e-9, rs_out)
     px, py, pth = x, y, th
     for i in range(n):
-        if not arc_checked(geo, px, py, pth, rs_out[i, 0], rs_out[i, 1], ds, footprint, local, corners):
+        if not arc_scored(geo, px, py, pth, rs_out[i, 0], rs_out[i, 1], n_samples, footprint, local, corners, hit):
             return -1
         px, py, pth = arc_point(px, py, pth, rs_out[i, 0], rs_out[i, 1])
     return n
@@ -120,7 +133,7 @@ def rs_shot(geo, x: float, y: float, th: float, gx: float, gy: float, gth: float
 
 @njit(cache=True, error_model="numpy")
 def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.ndarray, costs: np.ndarray,
-           kappa_max: float, ds: float, tol_m: float, tol_rad: float, region_m: float,
+           kappa_max: float, n_samples: int, tol_m: float, tol_rad: float, region_m: float,
            lattice: np.ndarray, n_lattice: np.ndarray,
            hgrid: np.ndarray, h_origin: np.ndarray, h_cell_m: float,
            guide: np.ndarray, guide_weight: float, guide_cap_m: float, analytic_every: int, analytic_near_m: float,
@@ -132,7 +145,8 @@ def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.
     arrays; returns (status, node).
 
     ``costs`` = (reverse factor, gear-switch cost m, steering cost m, steering-change cost m, heuristic weight);
-    ``lattice`` = (origin x, origin y, resolution m); ``n_lattice`` = (nx, ny, n_headings).
+    ``lattice`` = (origin x, origin y, resolution m); ``n_lattice`` = (nx, ny, n_headings); ``n_samples``: the
+    reference points per arc of the paper's rule (``arc_scored``).
     """
     gx, gy, gth = goal[0], goal[1], goal[2]
     reverse_factor, switch_cost, steer_cost, steer_change_cost, h_weight = costs[0], costs[1], costs[2], costs[3], costs[4]
@@ -140,6 +154,7 @@ def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.
     nx, ny, nth = n_lattice[0], n_lattice[1], n_lattice[2]
     stamp = state[S_STAMP]
     corners = np.empty((4, 2))
+    hit = np.empty(4)
     capacity = node_g.shape[0]
     use_guide = guide_weight > 0.0 and guide.shape[0] > 0
     while state[S_HEAP_SIZE] > 0:
@@ -161,7 +176,8 @@ def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.
             if dist <= tol_m and abs(wrap_angle(th - gth)) <= tol_rad:
                 return FOUND, i
             if state[S_EXPANDED] % analytic_every == 1 or rs_length(x, y, th, gx, gy, gth, kappa_max) <= analytic_near_m:
-                n_rs = rs_shot(geo, x, y, th, gx, gy, gth, kappa_max, ds, footprint, local, corners, rs_out)
+                n_rs = rs_shot(geo, x, y, th, gx, gy, gth, kappa_max, n_samples, footprint, local, corners, hit,
+                               rs_out)
                 if n_rs >= 0:
                     state[S_N_RS] = n_rs
                     return FOUND_ANALYTIC, i
@@ -181,7 +197,7 @@ def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.
                 g += steer_change_cost * abs(kappa - parent_kappa) / kappa_max
             if cell_stamp[c] == stamp and cell_g[c] <= g:
                 continue
-            if not arc_checked(geo, x, y, th, kappa, length, ds, footprint, local, corners):
+            if not arc_scored(geo, x, y, th, kappa, length, n_samples, footprint, local, corners, hit):
                 continue
             h = heuristic(nx_, ny_, nth_, gx, gy, gth, kappa_max, region_m, hgrid, h_origin[0], h_origin[1], h_cell_m)
             if not math.isfinite(h):

@@ -1,7 +1,7 @@
 """Hybrid A* (np_sim.planners.HybridAStar) on hand-made scenes, under both collision conventions.
 
-Every returned path is re-checked with ``path_valid`` at the poses ``Plan.sample(check_spacing_m)`` yields, under
-the convention it was planned with, and its end is integrated independently with ``arc_step`` (eq:arc).
+Every returned path is re-checked with the rule it is scored by (``np_sim.validate``: the paper's 30 reference
+points per arc, or the sampled footprint and the exact swept footprint), and its end is integrated independently with ``arc_step`` (eq:arc).
 """
 
 from __future__ import annotations
@@ -12,13 +12,14 @@ import math
 import numpy as np
 import pytest
 
-from np_sim.collision import path_valid
+from np_sim.benchmarks.frozen import frozen_starts, load_benchmark
 from np_sim.errors import ConfigError
 from np_sim.examples import example_path
 from np_sim.kinematics import arc_step, wrap_angle
 from np_sim.planners import HybridAStar, HybridAStarConfig
 from np_sim.scene import Scene
 from np_sim.starts import UniformStartSampler
+from np_sim.validate import scoring_rule, validate_plan
 
 CONVENTIONS = ["reference_point", "footprint"]
 
@@ -49,8 +50,9 @@ def _assert_valid_success(planner: HybridAStar, scene: Scene, plan) -> None:
     assert plan.success, plan.reason
     assert plan.reason == ""
     assert plan.expanded_nodes >= 1 and plan.plan_time_s > 0
-    poses = plan.sample(planner.config.check_spacing_m)[:, :3]
-    assert path_valid(scene, poses, planner.convention)
+    assert validate_plan(scene, plan, scoring_rule(planner.convention)).valid
+    if planner.convention == "footprint":
+        assert validate_plan(scene, plan, "exact", convention="footprint").valid
     end = _end(plan)
     assert math.hypot(*(end[:2] - scene.target[:2])) <= 0.1
     assert abs(wrap_angle(end[2] - scene.target[2])) <= math.radians(10.0)
@@ -123,8 +125,8 @@ def test_region_goal_stops_within_the_radius():
     planner = HybridAStar()
     plan = planner.plan_to_region(scene, [20.0, 5.0, math.pi / 2], radius_m=6.0)
     assert plan.success
-    sampled = plan.sample(planner.config.check_spacing_m)
-    assert path_valid(scene, sampled[:, :3])
+    sampled = plan.sample(0.1)
+    assert validate_plan(scene, plan, "paper").valid
     assert math.hypot(*(_end(plan)[:2] - scene.target[:2])) <= 6.0
     assert np.all(np.hypot(*(sampled[:-1, :2] - scene.target[:2]).T) > 6.0 - planner.config.step_m)
     inside = planner.plan_to_region(scene, [20.0, 25.0, 0.0], radius_m=15.0)
@@ -158,3 +160,21 @@ def test_bad_arguments_are_named():
 def test_primitives_span_the_curvature_range_in_both_gears():
     prims = HybridAStarConfig(n_curvatures=3, step_m=1.2).primitives()
     np.testing.assert_allclose(prims, [[-0.68, 1.2], [0.0, 1.2], [0.68, 1.2], [-0.68, -1.2], [0.0, -1.2], [0.68, -1.2]])
+
+
+@pytest.mark.parametrize("convention, name, index", [
+    ("reference_point", "factorial-test-near-random-medium-0", 4),
+    ("reference_point", "factorial-test-medium-reverse-hard-0", 1),
+    ("footprint", "factorial-test-long-random-easy-0", 30),
+])
+def test_frozen_starts_whose_plans_once_clipped_a_corner_pass_the_scoring_rule(convention, name, index):
+    # these starts used to give plans with a reference point 8-9 mm inside an obstacle corner at a 30-sample
+    # point, or a footprint crossing an obstacle between the 0.1 m check points
+    scenes = load_benchmark("factorial", "test")
+    k = [s.name for s in scenes].index(name)
+    planner = HybridAStar(convention=convention)
+    plan = planner.plan(scenes[k], frozen_starts("factorial")[k, index])
+    if plan.success:
+        _assert_valid_success(planner, scenes[k], plan)
+    else:
+        assert plan.reason in ("budget", "no path", "node budget") or plan.reason.startswith("validation:")
