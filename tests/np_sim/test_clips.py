@@ -56,9 +56,18 @@ def test_forty_seven_eval_clips_load_disjoint_from_train(eval_clips, train_clips
     assert not {c.name for c in eval_clips} & {c.name for c in train_clips}
     assert not {c.seed for c in eval_clips} & {c.seed for c in train_clips}
     assert [c.seed for c in train_clips] == [0, 1, 2]  # the train stream starts at seed 0
+    # all 1,000 training clips, without generating them: a clip is a function of its seed, the train stream walks
+    # seeds upward from 0 and may not reach 1,000,000 (next test), and every eval seed lies at or above it
+    assert min(c.seed for c in eval_clips) >= 1_000_000
     assert all(c.target_spot in range(len(c.site.spots)) for c in eval_clips)
     assert all(np.array_equal(c.target, c.site.spots[c.target_spot].pose) for c in eval_clips)
     assert all(50 <= c.n_frames <= 100 for c in eval_clips)
+
+
+def test_the_train_seed_stream_stops_before_the_eval_seeds(monkeypatch):
+    monkeypatch.setitem(SEED_BASE, "train", 999_999)  # one seed left below the eval stream
+    with pytest.raises(ConfigError, match="the train seed stream ran into the eval stream's seeds"):
+        generate_split("train", 3)
 
 
 def test_unknown_split_names_the_valid_ones():
@@ -178,6 +187,21 @@ def test_target_is_free_in_every_frame_and_start_at_frame_zero(eval_clips, train
         assert not np.any(shapely.intersects([ShapelyPolygon(p) for p in clip.ground_truth(0)], start))
 
 
+def _geodesic_of_start(grid, xy) -> float:
+    """The written rule for the start's geodesic distance: its own cell's distance when that cell is free, else
+    the free cell of its 3 × 3 block whose centre is nearest, plus the straight distance to that centre."""
+    row, col = (int(v) for v in grid.cell_of(np.asarray(xy, float)))
+    candidates = []
+    for r in range(row - 1, row + 2):
+        for c in range(col - 1, col + 2):
+            if 0 <= r < grid.free.shape[0] and 0 <= c < grid.free.shape[1] and grid.free[r, c]:
+                centre = grid.origin + grid.cell_m * np.array([c, r])
+                if (r, c) == (row, col):
+                    return float(grid.distance[r, c])
+                candidates.append((math.dist(xy, centre), float(grid.distance[r, c])))
+    return min(candidates)[0] + min(candidates)[1] if candidates else math.inf
+
+
 def test_every_eval_clip_satisfies_the_written_difficulty_rule(eval_clips):
     rule = DifficultyRule()
     for clip in eval_clips:
@@ -190,8 +214,7 @@ def test_every_eval_clip_satisfies_the_written_difficulty_rule(eval_clips):
         heading = np.array([math.cos(clip.target[2]), math.sin(clip.target[2])])
         along, lateral = float(delta @ heading), float(delta[0] * -heading[1] + delta[1] * heading[0])
         grid = geodesic_grid(clip.frame_scene(0, ground_truth=True))
-        own = float(grid.distance_at(clip.start[:2]))
-        assert d.geodesic_m == pytest.approx(own, abs=1e-3) or not grid.free[grid.cell_of(clip.start[:2])]
+        assert d.geodesic_m == pytest.approx(_geodesic_of_start(grid, clip.start[:2]), abs=1e-3)
         detour = straight >= rule.detour_min_straight_m and d.geodesic_m / straight >= rule.detour_ratio
         averse = cos_h < rule.averse_cos and straight <= rule.averse_radius_m
         front = (clip.site.spots[clip.target_spot].kind == "reverse" and 0 < along <= rule.front_depth_m
