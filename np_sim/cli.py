@@ -102,7 +102,7 @@ def folder_problem(path: Path) -> str | None:
         return f"{path} is a file; expected a new or empty folder"
     if path.is_dir() and any(path.iterdir()):
         return (f"{path} exists and is not empty (an earlier run's results are kept); give a new or empty folder, "
-                f"or leave --out out for a fresh timestamped one")
+                f"or omit --out for a fresh timestamped one")
     return None
 
 

@@ -156,10 +156,17 @@ def test_a_limit_below_one_is_refused_by_the_functions_too(tmp_path):
     assert not any(tmp_path.iterdir())  # refused before a run folder was made
 
 
-def test_closed_loop_merges_only_the_recordings_it_names(tmp_path):
+def test_closed_loop_merges_only_the_recordings_it_names(tmp_path, monkeypatch):
     assert closed_loop.merge_rrd([], tmp_path / "merged.rrd") is None
     assert not (tmp_path / "merged.rrd").exists()
     assert closed_loop.rrd_path(tmp_path, "eval-1000016", "hybrid_astar") == tmp_path / "eval-1000016_hybrid_astar.rrd"
+    stale, ours = tmp_path / "eval-1000001_hybrid_astar.rrd", tmp_path / "eval-1000016_hybrid_astar.rrd"
+    stale.write_bytes(b"killed run")
+    ours.write_bytes(b"this run")
+    calls = []
+    monkeypatch.setattr(closed_loop.subprocess, "run", lambda args, **_: calls.append(args))
+    assert closed_loop.merge_rrd([ours], tmp_path / "merged.rrd") == tmp_path / "merged.rrd"
+    assert len(calls) == 1 and calls[0][-1] == str(ours) and str(stale) not in calls[0]
 
 
 def readme_commands() -> list[tuple[str, str]]:
