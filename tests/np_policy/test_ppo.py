@@ -28,6 +28,23 @@ def tiny_rollout():
     return rewards, values, next_values, terminated, truncated
 
 
+def gae_loop(rewards, values, next_values, terminated, truncated, gamma, lam):
+    """Test oracle, written without np_policy.ppo: GAE env by env, step by step backwards. A terminated step
+    bootstraps nothing, a truncated one bootstraps V(final obs); both end the λ-chain."""
+    steps, envs = rewards.shape
+    advantages = np.zeros((steps, envs))
+    for n in range(envs):
+        running = 0.0
+        for t in reversed(range(steps)):
+            bootstrap = 0.0 if terminated[t, n] else next_values[t, n]
+            delta = rewards[t, n] + gamma * bootstrap - values[t, n]
+            if terminated[t, n] or truncated[t, n]:
+                running = 0.0
+            running = delta + gamma * lam * running
+            advantages[t, n] = running
+    return advantages, advantages + values
+
+
 def test_gae_matches_a_hand_computation_with_termination_and_truncation():
     rewards, values, next_values, terminated, truncated = tiny_rollout()
     gamma, lam = 0.9, 0.5
@@ -38,6 +55,7 @@ def test_gae_matches_a_hand_computation_with_termination_and_truncation():
     advantages, returns = gae(rewards, values, next_values, terminated, truncated, gamma, lam)
     np.testing.assert_allclose(advantages, expected, atol=1e-12)
     np.testing.assert_allclose(returns, expected + values, atol=1e-12)
+    np.testing.assert_allclose(gae_loop(*tiny_rollout(), gamma, lam)[0], expected, atol=1e-12)  # the oracle too
     for before, after in zip(inputs, tiny_rollout()):
         np.testing.assert_array_equal(before, after)
 
@@ -57,16 +75,24 @@ def test_compute_targets_scales_values_and_returns_by_the_running_std():
     rewards, values, next_values, terminated, truncated = tiny_rollout()
     config = PPOConfig(gamma=0.9, gae_lambda=0.5)
     rms = RunningMeanStd()
-    rms.update(np.array([0.0, 4.0]))  # var 4 → σ ≈ 2
+    rms.update(np.array([0.0, 4.0]))  # population variance 4: σ = √(4 + ε) ≈ 2
     sigma = np.sqrt(4.0 + config.norm_eps)
     adv, targets = compute_targets(rewards, values, next_values, terminated, truncated, config, rms)
-    raw_adv, raw_returns = gae(rewards, values * sigma, next_values * sigma, terminated, truncated, 0.9, 0.5)
-    np.testing.assert_allclose(adv, raw_adv)
-    np.testing.assert_allclose(targets, raw_returns / sigma)
-    assert rms.count == 2 + 6
+    # the critic speaks in units of σ: GAE on σ·V in reward units, targets divided back by σ
+    want_adv, want_returns = gae_loop(rewards, values * sigma, next_values * sigma, terminated, truncated, 0.9, 0.5)
+    np.testing.assert_allclose(adv, want_adv, atol=1e-12)
+    np.testing.assert_allclose(targets, want_returns / sigma, atol=1e-12)
+    # env 1 at t = 2 by hand: δ = −1 + 0 − 3σ (next value 0, not terminated), chain cut by the truncation before
+    assert adv[2, 1] == pytest.approx(-1.0 - 3.0 * sigma) and targets[2, 1] == pytest.approx(-1.0 / sigma)
+    # the statistics then take the six raw (reward-unit) returns
+    seen = np.concatenate([[0.0, 4.0], want_returns.reshape(-1)])
+    assert rms.count == 8
+    np.testing.assert_allclose([rms.mean, rms.var], [seen.mean(), seen.var()], rtol=1e-12)
     off = dataclasses.replace(config, norm_rewards=False)
-    _, plain = compute_targets(rewards, values, next_values, terminated, truncated, off, None)
-    np.testing.assert_allclose(plain, gae(rewards, values, next_values, terminated, truncated, 0.9, 0.5)[1])
+    plain_adv, plain = compute_targets(rewards, values, next_values, terminated, truncated, off, None)
+    want_adv, want_returns = gae_loop(rewards, values, next_values, terminated, truncated, 0.9, 0.5)
+    np.testing.assert_allclose(plain_adv, want_adv, atol=1e-12)
+    np.testing.assert_allclose(plain, want_returns, atol=1e-12)
 
 
 def test_clipped_loss_matches_a_hand_computation():
