@@ -3,7 +3,10 @@
 ``NeuralParkerPlanner.from_checkpoint(path).plan(scene, start) -> Plan`` plays the mean action in the same
 environment the policy was trained in (``ParkingEnv`` with the checkpoint's ``EnvConfig``), so arcs, collision
 checks, the heading gate and the Hermite selection follow exactly the env's rules. The mean action is evaluated by
-``CompiledActor`` (the same weights in one numba function, about 20× faster than torch at batch 1).
+``CompiledActor`` (the same weights in one numba function, about 20× faster than torch at batch 1). Every
+successful rollout is validated before it is claimed or chosen (`np_sim.validate.validation_failure`): the env's
+own rule, which it passes by construction, and under the footprint convention the exact swept footprint, which a
+rollout checked at 30 samples per arc can break between samples; such a rollout becomes a failure 'validation: …'.
 
 ``samples=N`` (beyond the paper, ``np_policy.sampling``) adds N seeded stochastic rollouts of the same policy to
 the mean rollout and returns the successful one the tracker can steer with the lowest drive-time, reversal,
@@ -36,6 +39,7 @@ from np_policy.train import TrainConfig, check_benchmark_layout, checkpoint_conf
 from np_sim.env import ParkingEnv
 from np_sim.plan import Plan
 from np_sim.scene import Scene
+from np_sim.validate import validation_failure
 
 
 ACTIONS = ("mean", "sample")
@@ -147,16 +151,30 @@ class NeuralParkerPlanner:
         ``action='sample'``, one rollout of sampled actions."""
         t0 = time.perf_counter()
         if self.single is not None:
-            plan = self.single(scene, start, seed=query_seed(self.seed, start))[0]
+            plan = self._claimed(scene, self.single(scene, start, seed=query_seed(self.seed, start))[0])
             return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0)
-        plan = self._mean_rollout(scene, start)
+        plan = self._claimed(scene, self._mean_rollout(scene, start))
         if self.sampled is not None:
-            plan = choose([plan, *self.sampled(scene, start)], scene, self.body, self.weights)
+            plan = choose([plan, *self._claimed_all(scene, self.sampled(scene, start))], scene, self.body, self.weights)
         for rounds in self.rescue:
             if plan.success and not self._too_close(scene, plan):
                 break
-            plan = choose([plan, *rounds(scene, start)], scene, self.body, self.weights)
+            plan = choose([plan, *self._claimed_all(scene, rounds(scene, start))], scene, self.body, self.weights)
         return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0)
+
+    def _claimed(self, scene: Scene, plan: Plan) -> Plan:
+        """``plan``, or a failure with reason 'validation: …' when a success breaks the rule it is scored by (the
+        env's own: the paper's or the sampled footprint) or, under the footprint convention, the exact swept rule
+        (`np_sim.validate.validation_failure`, with the real body)."""
+        if not plan.success:
+            return plan
+        env = self.config.env
+        reason = validation_failure(scene, plan, env.collision, self.body, env.episode.samples_per_arc)
+        return dataclasses.replace(plan, success=False, reason=reason) if reason else plan
+
+    def _claimed_all(self, scene: Scene, plans: Sequence[Plan]) -> list[Plan]:
+        """``_claimed`` of every plan, in order."""
+        return [self._claimed(scene, plan) for plan in plans]
 
     def _too_close(self, scene: Scene, plan: Plan) -> bool:
         """The plan keeps less clearance than ``rescue_clearance_m`` (module docstring)."""

@@ -194,3 +194,17 @@ def plan_valid(scene: Scene, plan: Plan, rule: str, convention: Convention = "fo
                vehicle: VehicleSpec | None = None) -> bool:
     """``validate_plan(...).valid`` for a successful plan; False for a failed one (nothing to validate)."""
     return bool(plan.success) and validate_plan(scene, plan, rule, convention=convention, vehicle=vehicle).valid
+
+
+def validation_failure(scene: Scene, plan: Plan, convention: Convention, vehicle: VehicleSpec | None = None,
+                       samples_per_arc: int = EpisodeConfig.samples_per_arc) -> str:
+    """'' when ``plan`` passes the rule a planner of ``convention`` is scored by (``scoring_rule``) and, under the
+    footprint convention, the exact rule too; else 'validation: ' with the rule and its first violation. What
+    every planner checks before it claims a success."""
+    rules = [scoring_rule(convention)] + (["exact"] if convention == "footprint" else [])
+    for rule in rules:
+        result = validate_plan(scene, plan, rule, convention=convention, vehicle=vehicle,
+                               samples_per_arc=samples_per_arc)
+        if not result.valid:
+            return f"validation: {rule} rule, {result.violation.describe()}"
+    return ""

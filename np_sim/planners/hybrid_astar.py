@@ -35,7 +35,7 @@ from np_sim.planners import search_kernels as sk
 from np_sim.planners.heuristic import HolonomicGrid, holonomic_grid
 from np_sim.scene import Scene
 from np_sim.scene_arrays import packed_scene
-from np_sim.validate import scoring_rule, validate_plan
+from np_sim.validate import validation_failure
 from np_sim.vehicle import VehicleSpec
 
 
@@ -263,20 +263,10 @@ class HybridAStar:
             arcs = np.concatenate([arcs, rs_out[: state[sk.S_N_RS]]])
         reason = "" if self._reached(p, arcs, goal, region_m) else "goal missed"
         if not reason:
-            reason = self._validation_failure(scene, Plan(start=p, arcs=arcs, success=True))
+            reason = validation_failure(scene, Plan(start=p, arcs=arcs, success=True), self.convention,
+                                        c.vehicle, c.samples_per_arc)
         return Plan(start=p, arcs=arcs, success=reason == "", reason=reason, plan_time_s=time.perf_counter() - t0,
                     expanded_nodes=expanded)
-
-    def _validation_failure(self, scene: Scene, plan: Plan) -> str:
-        """'' when ``plan`` passes the rule it is scored by (and, footprint convention, the exact rule), else
-        'validation: ' and its first violation."""
-        rules = [scoring_rule(self.convention)] + (["exact"] if self.convention == "footprint" else [])
-        for rule in rules:
-            result = validate_plan(scene, plan, rule, convention=self.convention, vehicle=self.config.vehicle,
-                                   samples_per_arc=self.config.samples_per_arc)
-            if not result.valid:
-                return f"validation: {rule} rule, {result.violation.describe()}"
-        return ""
 
     def _reached(self, start: np.ndarray, arcs: np.ndarray, goal: np.ndarray, region_m: float) -> bool:
         """The arcs end within the goal tolerance (or the region), integrated with eq:arc."""

@@ -103,3 +103,25 @@ def test_the_connector_can_be_swapped_at_load_and_a_bad_mode_is_named(planner, t
     expected = r"connector: expected one of \('fixed', 'ensemble', 'centred'\), got 'spline'"
     with pytest.raises(ConfigError, match=expected):
         NeuralParkerPlanner.from_checkpoint(ckpt, "spline")
+
+
+def test_a_success_that_breaks_its_rule_is_claimed_as_a_validation_failure(planner, monkeypatch):
+    # a rollout "succeeding" along the arc (κ 0.5, l 3 m) whose front-left corner sweeps 1 mm into the apex of a
+    # thin triangle between its 11th and 12th of 30 samples: the sampled footprint passes, the exact rule does not
+    import dataclasses
+
+    from np_sim.plan import Plan
+    from np_sim.scene import Scene
+
+    triangle = [[4.7417, -1.3138], [5.7286, -1.1508], [5.7343, -1.1904]]
+    scene = Scene.from_dict({"boundary": [[-30, -30], [30, -30], [30, 30], [-30, 30]],
+                             "obstacles": [{"polygon": triangle}], "target": [20.0, 20.0, 0.0]})
+    env = dataclasses.replace(planner.config.env, collision="footprint")
+    footprint = NeuralParkerPlanner(planner.model, dataclasses.replace(planner.config, env=env))
+    clipped = Plan(start=np.zeros(3), arcs=np.array([[0.5, 3.0]]), success=True)
+    monkeypatch.setattr(footprint, "_mean_rollout", lambda scene, start: clipped)
+    plan = footprint.plan(scene, np.zeros(3))
+    assert not plan.success and plan.reason.startswith("validation: exact rule, segment 0")
+    shorter = dataclasses.replace(clipped, arcs=np.array([[0.5, 0.9]]))
+    monkeypatch.setattr(footprint, "_mean_rollout", lambda scene, start: shorter)
+    assert footprint.plan(scene, np.zeros(3)).success

@@ -1,7 +1,8 @@
 """Hybrid A* (np_sim.planners.HybridAStar) on hand-made scenes, under both collision conventions.
 
 Every returned path is re-checked with the rule it is scored by (``np_sim.validate``: the paper's 30 reference
-points per arc, or the sampled footprint and the exact swept footprint), and its end is integrated independently with ``arc_step`` (eq:arc).
+points per arc, or the sampled footprint and the exact swept footprint), and its end is integrated independently
+with ``arc_step`` (eq:arc).
 """
 
 from __future__ import annotations

@@ -220,3 +220,41 @@ def test_unknown_rule_and_convention_are_errors_naming_the_choices():
     with pytest.raises(ConfigError, match="convention must be"):
         validate_plan(_scene([]), plan, "exact", convention="wheels")
     assert set(RULES) == {"paper", "footprint_sampled", "exact"}
+
+
+@pytest.mark.parametrize("convention", ["reference_point", "footprint"])
+def test_the_scoring_rule_accepts_exactly_what_the_env_accepts(convention):
+    # random arcs played in the env; after every step the plan so far (with the env's Hermite segment on a
+    # connected success) passes the scoring rule iff the env did not report a collision
+    from np_sim.config import EnvConfig
+    from np_sim.env import ParkingEnv
+    from np_sim.examples import example_scenes
+    from np_sim.frames import from_target_frame
+    from np_sim.kernels import step as K
+    from np_sim.starts import UniformStartSampler
+    from np_sim.validate import scoring_rule
+
+    scenes = [s for s in example_scenes() if s.tags.get("expect") != "no_path"]
+    config = EnvConfig(collision=convention)
+    rng = np.random.default_rng(3)
+    outcomes = set()
+    for k, scene in enumerate(scenes[:4]):
+        env = ParkingEnv(scene, config)
+        for start in UniformStartSampler([scene])(rng, np.zeros(6, np.int64)):
+            env.reset(options={"start": start})
+            arcs = []
+            while True:
+                action = rng.uniform(-1, 1, 2) * np.array([1.0, 0.3])
+                _, _, term, trunc, info = env.step(action)
+                arcs.append(action * np.array([config.vehicle.kappa_max, config.episode.max_length_m]))
+                h = int(env.core.R[0, K.R_HERMITE])
+                hermite = None if h < 0 else HermiteSegment(
+                    points=from_target_frame(env.core.h_pts[0, h].T, scene.target),
+                    forward=bool(env.core.R[0, K.R_H_FORWARD] > 0), length=1.0, delta_kappa=0.0)
+                plan = Plan(start=start, arcs=np.array(arcs), hermite=hermite, success=True)
+                valid = validate_plan(scene, plan, scoring_rule(convention)).valid
+                assert valid == (not info["collision"])
+                outcomes.add((valid, hermite is not None))
+                if term or trunc:
+                    break
+    assert outcomes == {(False, False), (True, False), (True, True)}  # collisions, free arcs, connected successes
