@@ -1,0 +1,201 @@
+"""The reproduction sweep: every training run the paper's simulation tables need, on Ray.
+
+``python -m experiments.sweep --plan paper [--only TABLE ...] [--seeds 0 1 2] [--ray-address ADDR] [--out DIR]
+[--dry-run]``
+
+Each run is a (configuration, benchmark, seed) with its own run folder under ``--out`` (default
+``checkpoints/runs``); the plan and how a folder's state is decided are in `experiments.sweep_plan`. The sweep
+starts a local Ray sized to this machine (or joins the cluster at ``--ray-address``; the run root must then be on
+storage every node shares, with the project installed on every node) and submits one Ray task per run that is
+not finished, requesting ``--cpus-per-run`` CPUs and, where the cluster has GPUs, ``--gpus-per-run`` GPUs. A task
+runs ``python -m np_policy.train`` in a subprocess (its log under ``--log-dir``): with ``--resume`` when the
+folder holds ``snapshot.pt``, from epoch 0 otherwise (``--overwrite`` when a run killed before its first snapshot
+left files there). Finished runs are skipped, so a killed sweep continues where
+it stopped when started again. A run that a ``np_policy.train`` process on this machine is writing, or whose
+folder holds another configuration, is left alone and reported. Progress: one bar over the runs, with each
+running run's epoch read from its ``metrics.jsonl``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from experiments.sweep_plan import RunSpec, RunState, active_trainers, expand, format_table, holds_run_files, \
+    load_plan, metrics_epoch, run_state
+from np_sim.errors import ConfigError
+
+RUNNABLE = ("not started", "interrupted", "started, no snapshot")
+"""States the sweep trains; the others are finished, left alone, or not available yet."""
+POLL_S = 2.0
+"""Seconds between progress refreshes."""
+
+
+def train_argv(run: RunSpec, config_file: Path) -> list[str]:
+    """``np_policy.train`` arguments of ``run``, decided from its folder when the task starts (so a retried
+    task resumes what an earlier attempt left): ``--resume`` when ``snapshot.pt`` exists, ``--overwrite`` when the
+    folder holds run files but no snapshot (nothing to resume: a start from epoch 0 replaces them)."""
+    argv = ["--benchmark", run.config.benchmark, "--seed", str(run.seed), "--config", str(config_file),
+            "--out", str(run.run_dir)]
+    if (run.run_dir / "snapshot.pt").exists():
+        return [*argv, "--resume"]
+    return [*argv, "--overwrite"] if holds_run_files(run.run_dir) else argv
+
+
+def _kill_with_parent() -> None:
+    """In the trainer's child process: die with SIGKILL when the Ray worker that started it dies (Linux)."""
+    import ctypes
+
+    ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+
+
+def train_run(run: RunSpec, log_path: Path) -> dict[str, Any]:
+    """Train (or resume) one run in a ``python -m np_policy.train`` subprocess; returns its exit status and the
+    tail of its log. This is the body of the sweep's Ray task."""
+    log_path.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="sweep-") as tmp:
+        config_file = Path(tmp) / f"{run.name}.json"
+        config_file.write_text(json.dumps(run.overrides, indent=2))
+        argv = [sys.executable, "-m", "np_policy.train", *train_argv(run, config_file)]
+        with log_path.open("ab") as log:
+            log.write(("\n$ " + " ".join(argv) + "\n").encode())
+            log.flush()
+            preexec = _kill_with_parent if sys.platform.startswith("linux") else None
+            rc = subprocess.run(argv, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                preexec_fn=preexec, check=False).returncode
+    tail = log_path.read_text(errors="replace")[-2000:]
+    return {"run": run.name, "rc": rc, "log": str(log_path), "tail": tail}
+
+
+def _cluster_resources(args) -> tuple[float, float]:
+    """(CPUs, GPUs) per run: the requested numbers, by default a whole node's CPUs (a run's torch uses every core
+    it is given) and one GPU when the cluster has any."""
+    import ray
+
+    nodes = [n["Resources"] for n in ray.nodes() if n.get("Alive")]
+    cpus = args.cpus_per_run or max(n.get("CPU", 1.0) for n in nodes)
+    has_gpu = any(n.get("GPU", 0) >= 1 for n in nodes)
+    gpus = args.gpus_per_run if args.gpus_per_run is not None else (1.0 if has_gpu else 0.0)
+    return cpus, gpus
+
+
+def _start_ray(address: str | None) -> None:
+    import ray
+
+    if address:
+        ray.init(address=address, log_to_driver=False)
+    else:
+        ray.init(num_cpus=os.cpu_count(), include_dashboard=False, log_to_driver=False)
+
+
+def _progress_text(running: list[RunSpec], since: float) -> str:
+    """``name epoch/epochs`` of every pending run whose metrics.jsonl was written since the sweep started."""
+    parts = []
+    for run in running:
+        path = run.run_dir / "metrics.jsonl"
+        if path.exists() and path.stat().st_mtime >= since:
+            parts.append(f"{run.name} {metrics_epoch(path)}/{run.epochs}")
+    return ", ".join(parts)
+
+
+def run_sweep(todo: list[RunSpec], args) -> list[dict[str, Any]]:
+    """Submit one Ray task per run of ``todo`` and wait for all of them, showing progress; returns the tasks'
+    results."""
+    import ray
+    from tqdm import tqdm
+
+    _start_ray(args.ray_address)
+    cpus, gpus = _cluster_resources(args)
+    task = ray.remote(max_retries=1)(train_run).options(num_cpus=cpus, num_gpus=gpus)
+    pending = {task.remote(run, Path(args.log_dir).resolve() / f"{run.name}.log"): run for run in todo}
+    print(f"sweep: {len(todo)} run(s) on Ray ({cpus:g} CPU, {gpus:g} GPU per run)", flush=True)
+    since = time.time()
+    results = []
+    with tqdm(total=len(todo), unit="run", desc="sweep") as bar:
+        while pending:
+            done, _ = ray.wait(list(pending), num_returns=1, timeout=POLL_S)
+            for ref in done:
+                run = pending.pop(ref)
+                result = ray.get(ref)
+                results.append(result)
+                verdict = "done" if result["rc"] == 0 else f"FAILED (exit {result['rc']}, log {result['log']})"
+                bar.write(f"{run.name}: {verdict}")
+                bar.update(1)
+            bar.set_postfix_str(_progress_text(list(pending.values()), since), refresh=True)
+    ray.shutdown()
+    return results
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="python -m experiments.sweep", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--plan", default="paper", help="'paper' (every run of the paper's simulation tables) or "
+                        "a plan .json file (see experiments.sweep_plan.load_plan)")
+    parser.add_argument("--only", nargs="+", metavar="TABLE", help="only the runs feeding these tables (paper: "
+                        "main, staged, representation, connector, curriculum, site)")
+    parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2], help="training seeds (default 0 1 2)")
+    parser.add_argument("--ray-address", help="join this Ray cluster (default: start a local Ray on this machine)")
+    parser.add_argument("--out", type=Path, default=Path("checkpoints/runs"), help="run root (default "
+                        "checkpoints/runs)")
+    parser.add_argument("--log-dir", type=Path, default=Path("results/sweep/logs"),
+                        help="training logs, one per run (default results/sweep/logs)")
+    parser.add_argument("--cpus-per-run", type=int, help="CPUs per run (default: a whole node's)")
+    parser.add_argument("--gpus-per-run", type=float, help="GPUs per run (default: 1 when the cluster has GPUs)")
+    parser.add_argument("--dry-run", action="store_true", help="list the runs, their state and the estimated "
+                        "compute left; train nothing")
+    return parser
+
+
+def _check_args(args) -> None:
+    if args.cpus_per_run is not None and args.cpus_per_run < 1:
+        raise ConfigError(f"--cpus-per-run: expected an integer >= 1, got {args.cpus_per_run}")
+    if args.gpus_per_run is not None and args.gpus_per_run < 0:
+        raise ConfigError(f"--gpus-per-run: expected a number >= 0, got {args.gpus_per_run}")
+    if args.out.exists() and not args.out.is_dir():
+        raise ConfigError(f"--out: {args.out} is a file, expected a folder of run folders")
+
+
+def main(argv=None) -> int:
+    """CLI entry point; returns the exit status (0: every run finished or left alone as reported)."""
+    args = _parser().parse_args(argv)
+    try:
+        _check_args(args)
+        plan, config_dir = load_plan(args.plan)
+        runs = expand(plan, args.seeds, args.out, args.only, config_dir)
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    active = active_trainers()
+    states = [run_state(run, active) for run in runs]
+    print(format_table(runs, states), flush=True)
+    if args.dry_run:
+        return 0
+    todo = [run for run, state in zip(runs, states) if state.kind in RUNNABLE]
+    _report_skipped(runs, states)
+    if not todo:
+        print("sweep: nothing to train")
+        return 0
+    failed = [r for r in run_sweep(todo, args) if r["rc"] != 0]
+    for result in failed:
+        print(f"{result['run']}: training failed (exit {result['rc']}); end of {result['log']}:\n{result['tail']}",
+              file=sys.stderr)
+    return 1 if failed else 0
+
+
+def _report_skipped(runs: list[RunSpec], states: list[RunState]) -> None:
+    """One line per run the sweep does not train and that is not finished."""
+    for run, state in zip(runs, states):
+        if state.kind not in RUNNABLE and state.kind != "finished":
+            print(f"sweep: skipping {run.name}: {state.kind}" + (f" ({state.detail})" if state.detail else ""))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

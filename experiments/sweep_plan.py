@@ -1,0 +1,325 @@
+"""The reproduction sweep's plan and the state of its run folders (no Ray here; `experiments.sweep` runs it).
+
+A **plan** is a list of `Configuration` rows; each expands, per seed, to one `RunSpec`: a (configuration,
+benchmark, seed) with its own run folder under the run root. A configuration's training config is a JSON file of
+`TrainConfig` overrides in ``checkpoints/configs/``; every NeuralParker row of the Factorial and Topology-Stress
+benchmarks merges its file over one shared recipe, ``checkpoints/configs/recipe.json`` (paper Table
+``tab:app-ppo`` with the whole-lot reading of the geodesic curriculum, the file the shipped Factorial seeds were
+trained with as ``lot.json``). A configuration that cannot be trained today (adapted HOPE, BEV, the HOPE-style
+backbone) is in the plan with the reason, so it is listed as "not available yet" and never silently dropped.
+
+A run's **state** is read from its folder alone (`run_state`), never by loading a checkpoint:
+
+- *finished*: ``metrics.jsonl``'s last complete row is epoch ``ppo.epochs`` of the run's config and ``best.pt``
+  exists (the trainer appends the row, then writes ``best.pt`` and the final ``snapshot.pt``);
+- *interrupted*: ``snapshot.pt`` exists but the last row is an earlier epoch; the sweep resumes it (``--resume``);
+- *started, no snapshot*: run files (``metrics.jsonl``, ``best.pt``) but no ``snapshot.pt`` (killed before its
+  first snapshot): nothing to resume, the sweep trains it from epoch 0 with ``--overwrite`` (which replaces those
+  files);
+- *not started*: none of the trainer's run files (`holds_run_files`);
+- *training now*: a ``np_policy.train`` process on this machine writes the folder (the sweep leaves it alone);
+- *config differs*: the folder's ``config.json`` is another configuration (the sweep refuses to touch it);
+- *not available yet*: the configuration cannot be trained today.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from np_sim.config import config_from_dict
+from np_sim.errors import ConfigError
+
+CONFIG_DIR = Path(__file__).resolve().parent.parent / "checkpoints" / "configs"
+"""Where the sweep's configuration files live (committed)."""
+RECIPE_FILE = "recipe.json"
+"""The one NeuralParker recipe every Factorial and Topology-Stress NeuralParker row merges its overrides over."""
+FACTORIAL_EPOCH_S = 46.8
+"""Measured wall-clock seconds per epoch of the Factorial recipe on this 2-core machine (compute estimates)."""
+SITE_EPOCH_S = 5 * 3600 / 240
+"""About 5 h per 240-epoch site run on this machine (compute estimates)."""
+TABLES = {
+    "main": "Fig. 3, main comparison on the Factorial benchmark",
+    "staged": "Table II, unified versus staged planning",
+    "representation": "Table III and Fig. 5, scene representation on Topology-Stress",
+    "connector": "Table IV, terminal connector",
+    "curriculum": "Table V, start curriculum",
+    "site": "delivery-site closed loop (the paper-faithful site planner)",
+}
+"""``--only`` names: the experiment each group of runs feeds (one `experiments.<name>` module per table)."""
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """One row of a plan: a training configuration on one benchmark, run once per seed."""
+
+    name: str
+    """Run-name stem, e.g. ``factorial_np_fixed``."""
+    benchmark: str
+    """``np_policy.train --benchmark``."""
+    tables: tuple[str, ...]
+    """The `TABLES` this configuration's runs feed."""
+    config_file: str | None = None
+    """TrainConfig overrides in `CONFIG_DIR`; None when the configuration is not available yet."""
+    missing: str = ""
+    """Why the configuration is not available yet (with ``config_file`` None)."""
+    recipe: bool = True
+    """Merge the file over `RECIPE_FILE` (every NeuralParker row but the site's App. C configuration)."""
+    seeds: tuple[int, ...] | None = None
+    """Only these seeds exist in the plan (None: every requested seed)."""
+    run_name: str = "{name}_seed{seed}"
+    """Run folder name under the run root."""
+    epoch_s: float = FACTORIAL_EPOCH_S
+    """Estimated seconds per epoch on this machine."""
+
+
+_LOT = "{name}_seed{seed}_lot"
+"""Run folders of the recipe's rows: the shipped Factorial seeds were named for the whole-lot curriculum."""
+_HOPE = "the adapted HOPE planner is not built yet"
+_HOPE_STYLE = "the HOPE-style backbone is not built yet"
+_BEV = "the BEV representation (rendered image and pretrained autoencoder) is not built yet"
+PAPER_PLAN = (
+    Configuration("factorial_np", "factorial", ("main", "staged", "connector", "curriculum"), "factorial_np.json",
+                  run_name=_LOT),
+    Configuration("factorial_np_fixed", "factorial", ("connector",), "factorial_np_fixed.json", run_name=_LOT),
+    Configuration("factorial_np_nocurriculum", "factorial", ("curriculum",), "factorial_np_nocurriculum.json",
+                  run_name=_LOT),
+    Configuration("factorial_hope", "factorial", ("main", "staged"), missing=_HOPE),
+    Configuration("topology_np_none", "topology", ("representation",), "topology_np_none.json", run_name=_LOT),
+    Configuration("topology_np_bev", "topology", ("representation",), missing=_BEV),
+    Configuration("topology_np_vertices", "topology", ("representation",), "topology_np_vertices.json",
+                  run_name=_LOT),
+    Configuration("topology_hopestyle_none", "topology", ("representation",), missing=_HOPE_STYLE),
+    Configuration("topology_hopestyle_bev", "topology", ("representation",), missing=f"{_HOPE_STYLE}; {_BEV}"),
+    Configuration("topology_hopestyle_vertices", "topology", ("representation",), missing=_HOPE_STYLE),
+    Configuration("site_np", "site", ("site",), "site_np.json", recipe=False, seeds=(0,), epoch_s=SITE_EPOCH_S),
+)
+"""Every training run the paper's simulation tables need (``--plan paper``)."""
+PLANS = {"paper": PAPER_PLAN}
+
+
+def load_plan(plan: str) -> tuple[tuple[Configuration, ...], Path]:
+    """``(configurations, config_dir)`` of a named plan (`PLANS`) or of a plan file: a JSON object
+    ``{"configurations": [{"name", "benchmark", "tables", "config_file", ...}, ...]}`` with the `Configuration`
+    fields, whose configuration files (and ``recipe.json``) lie beside it."""
+    if plan in PLANS:
+        return PLANS[plan], CONFIG_DIR
+    path = Path(plan)
+    if path.suffix != ".json":
+        raise ConfigError(f"--plan: expected one of {sorted(PLANS)} or a plan .json file, got {plan!r}")
+    rows = read_overrides(path).get("configurations")
+    if not isinstance(rows, list) or not rows:
+        raise ConfigError(f"{path}: expected a non-empty list under 'configurations'")
+    configs = tuple(config_from_dict(Configuration, row, f"{path}: configurations[{i}]") for i, row in enumerate(rows))
+    for config in configs:
+        if config.config_file is None and not config.missing:
+            raise ConfigError(f"{path}: configuration {config.name!r}: give config_file, or missing (why not)")
+    return configs, path.parent
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One training run of a plan."""
+
+    config: Configuration
+    seed: int
+    run_dir: Path
+    overrides: dict[str, Any] | None
+    """The TrainConfig overrides given to ``np_policy.train --config`` (None: not available yet)."""
+    epochs: int | None
+    """The recipe's ``ppo.epochs`` (None: not available yet)."""
+
+    @property
+    def name(self) -> str:
+        """The run folder's name."""
+        return self.run_dir.name
+
+
+@dataclass(frozen=True)
+class RunState:
+    """What a run folder holds (see the module docstring for each ``kind``)."""
+
+    kind: str
+    epoch: int = 0
+    """Last complete epoch in metrics.jsonl."""
+    detail: str = ""
+
+
+def read_overrides(path: Path) -> dict[str, Any]:
+    """A sweep file's JSON object (a configuration's overrides, a plan); a missing or malformed file is a
+    ConfigError naming it."""
+    try:
+        data = json.loads(Path(path).read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ConfigError(f"{path}: cannot read this sweep file: {exc}") from None
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: expected a JSON object, got {type(data).__name__}")
+    return data
+
+
+def resolved_config(benchmark: str, seed: int, overrides: dict[str, Any]):
+    """The `TrainConfig` ``np_policy.train --benchmark B --seed S --config FILE`` builds from ``overrides``."""
+    from np_policy.train import TrainConfig, benchmark_defaults, merge_config
+
+    data = merge_config(benchmark_defaults(benchmark), overrides)
+    data.update(benchmark=benchmark, seed=seed)
+    return TrainConfig.from_dict(data)
+
+
+def expand(plan, seeds, root: Path, only=None, config_dir: Path = CONFIG_DIR) -> list[RunSpec]:
+    """The runs of ``plan`` for ``seeds`` under ``root``, restricted to configurations feeding a table of ``only``
+    (None: all); every configuration's file is read and its config validated here, so a bad file fails early."""
+    tables = {table for config in plan for table in config.tables}
+    unknown = sorted(set(only or ()) - tables)
+    if unknown:
+        raise ConfigError(f"--only: unknown table(s) {unknown}; expected some of {sorted(tables)}")
+    if any(seed < 0 for seed in seeds):
+        raise ConfigError(f"--seeds: expected non-negative integers, got {list(seeds)}")
+    recipe = None
+    runs = []
+    for config in plan:
+        if only and not set(config.tables) & set(only):
+            continue
+        overrides = None
+        if config.config_file is not None:
+            overrides = read_overrides(Path(config_dir) / config.config_file)
+            if config.recipe:
+                from np_policy.train import merge_config
+
+                recipe = read_overrides(Path(config_dir) / RECIPE_FILE) if recipe is None else recipe
+                overrides = merge_config(recipe, overrides)
+        for seed in dict.fromkeys(seeds):
+            if config.seeds is not None and seed not in config.seeds:
+                continue
+            epochs = None
+            if overrides is not None:
+                epochs = resolved_config(config.benchmark, seed, overrides).ppo.epochs
+            run_dir = Path(root) / config.run_name.format(name=config.name, seed=seed)
+            runs.append(RunSpec(config, seed, run_dir, overrides, epochs))
+    return runs
+
+
+def metrics_epoch(path: Path) -> int:
+    """The epoch of the last complete row of a ``metrics.jsonl`` (0 when absent or empty); a torn last line is
+    skipped."""
+    if not path.exists():
+        return 0
+    epoch = 0
+    for line in path.read_text(errors="replace").splitlines():
+        try:
+            epoch = int(json.loads(line)["epoch"])
+        except (ValueError, KeyError, TypeError):
+            continue
+    return epoch
+
+
+def config_conflicts(run: RunSpec) -> list[str]:
+    """Fields where the folder's ``config.json`` differs from the plan's config (empty when it has none)."""
+    from np_policy.train import TrainConfig
+
+    path = run.run_dir / "config.json"
+    if not path.exists():
+        return []
+    try:
+        theirs = TrainConfig.from_dict(json.loads(path.read_text())).to_dict()
+    except (ValueError, ConfigError) as exc:
+        return [f"config.json unreadable: {exc}"]
+    ours = resolved_config(run.config.benchmark, run.seed, run.overrides).to_dict()
+    return _differences(ours, theirs, "")
+
+
+def _differences(ours: Any, theirs: Any, where: str) -> list[str]:
+    if isinstance(ours, dict) and isinstance(theirs, dict):
+        return [d for key in sorted(set(ours) | set(theirs))
+                for d in _differences(ours.get(key), theirs.get(key), f"{where}.{key}" if where else key)]
+    if isinstance(ours, (list, tuple)) and isinstance(theirs, (list, tuple)):
+        ours, theirs = list(ours), list(theirs)
+    return [] if ours == theirs else [f"{where}: folder has {theirs!r}, plan has {ours!r}"]
+
+
+def active_trainers() -> dict[Path, int]:
+    """Run folders that a ``np_policy.train`` process on this machine writes now: {resolved --out: pid}."""
+    active = {}
+    for proc in Path("/proc").glob("[0-9]*"):
+        try:
+            argv = (proc / "cmdline").read_bytes().decode(errors="replace").split("\0")
+            cwd = Path(os.readlink(proc / "cwd"))
+        except OSError:
+            continue
+        if "np_policy.train" in argv and "--out" in argv[:-1]:
+            out = Path(argv[argv.index("--out") + 1])
+            active[(cwd / out).resolve()] = int(proc.name)
+    return active
+
+
+def run_state(run: RunSpec, active: dict[Path, int] | None = None) -> RunState:
+    """The state of ``run``'s folder (see the module docstring)."""
+    if run.overrides is None:
+        return RunState("not available yet", detail=run.config.missing)
+    epoch = metrics_epoch(run.run_dir / "metrics.jsonl")
+    pid = (active or {}).get(run.run_dir.resolve())
+    if pid is not None:
+        return RunState("training now", epoch, f"pid {pid}")
+    conflicts = config_conflicts(run)
+    if conflicts:
+        return RunState("config differs", epoch, "; ".join(conflicts))
+    if epoch >= run.epochs and (run.run_dir / "best.pt").exists():
+        return RunState("finished", epoch)
+    if (run.run_dir / "snapshot.pt").exists():
+        return RunState("interrupted", epoch)
+    if holds_run_files(run.run_dir):
+        return RunState("started, no snapshot", epoch)
+    return RunState("not started")
+
+
+def holds_run_files(folder: Path) -> bool:
+    """Whether ``folder`` holds any of the files that make ``np_policy.train`` see a run there (`RUN_FILES`)."""
+    from np_policy.train import RUN_FILES
+
+    return any((Path(folder) / name).exists() for name in RUN_FILES)
+
+
+def epochs_left(run: RunSpec, state: RunState) -> int | None:
+    """Epochs still to train (None when unknown): a resume restarts at the last snapshot, which is at least the
+    last multiple of ``ppo.snapshot_every_epochs`` reached, so this is an upper bound for an interrupted run."""
+    if run.epochs is None or state.kind in ("finished", "config differs"):
+        return None if run.epochs is None else 0
+    if state.kind in ("interrupted", "training now"):
+        every = resolved_config(run.config.benchmark, run.seed, run.overrides).ppo.snapshot_every_epochs
+        return run.epochs - min(state.epoch, run.epochs) // every * every
+    return run.epochs
+
+
+def estimate_hours(run: RunSpec, state: RunState) -> float | None:
+    """Estimated wall-clock hours left on this 2-core machine (None when unknown)."""
+    left = epochs_left(run, state)
+    return None if left is None else left * run.config.epoch_s / 3600
+
+
+def describe(state: RunState) -> str:
+    """One phrase for a state: "interrupted at epoch 50", "finished (240 epochs)", ..."""
+    if state.kind == "finished":
+        return f"finished ({state.epoch} epochs)"
+    if state.kind in ("interrupted", "started, no snapshot", "training now"):
+        text = f"{state.kind} at epoch {state.epoch}"
+        return f"{text} ({state.detail})" if state.detail else text
+    return f"{state.kind}: {state.detail}" if state.detail else state.kind
+
+
+def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
+    """The dry-run listing: one line per run with its state and estimated hours left, then the total."""
+    lines = [f"{'run':<38} {'tables':<34} {'est. h left':>11}  state"]
+    total = 0.0
+    for run, state in zip(runs, states):
+        hours = estimate_hours(run, state)
+        total += hours or 0.0
+        shown = "?" if hours is None else f"{hours:.1f}"
+        lines.append(f"{run.name:<38} {','.join(run.config.tables):<34} {shown:>11}  {describe(state)}")
+    unknown = sum(estimate_hours(r, s) is None for r, s in zip(runs, states))
+    lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine ({FACTORIAL_EPOCH_S} s per Factorial "
+                 f"epoch, about {SITE_EPOCH_S * 240 / 3600:.0f} h per site run; an estimate)"
+                 + (f", not counting {unknown} run(s) not available yet" if unknown else ""))
+    return "\n".join(lines)

@@ -1,0 +1,174 @@
+"""The reproduction sweep: plan and folder-state logic (dry run on a fake run root), the paper plan against the
+shipped run folders, and a tiny sweep on a local Ray that is killed mid-way and finishes on restart.
+
+``pytest -m sweep`` selects these tests; the Ray one starts real training subprocesses (about a minute)."""
+
+import hashlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from experiments.sweep import main, train_argv
+from experiments.sweep_plan import PAPER_PLAN, active_trainers, expand, load_plan, resolved_config, run_state
+
+pytestmark = pytest.mark.sweep
+REPO = Path(__file__).resolve().parents[2]
+TINY = {"curriculum_pool": 8, "env": {"episode": {"max_arcs": 20}},
+        "ppo": {"num_train_envs": 4, "num_test_envs": 2, "selection_episodes": 2, "steps_per_collect": 32,
+                "steps_per_epoch": 32, "batch_size": 32, "repeats": 1, "epochs": 2, "snapshot_every_epochs": 1}}
+
+
+def _plan(folder: Path, recipe: dict, epoch_s: float | None = None) -> Path:
+    """A plan file with two configurations on the examples scenes (ensemble and fixed connector) and a third one
+    that is not available."""
+    (folder / "recipe.json").write_text(json.dumps(recipe))
+    (folder / "a.json").write_text("{}")
+    (folder / "b.json").write_text(json.dumps({"env": {"connector": {"mode": "fixed"}}}))
+    extra = {} if epoch_s is None else {"epoch_s": epoch_s}
+    rows = [{"name": "a", "benchmark": "examples", "tables": ["main"], "config_file": "a.json",
+             "run_name": "{name}_seed{seed}_lot", **extra},
+            {"name": "b", "benchmark": "examples", "tables": ["connector"], "config_file": "b.json", **extra},
+            {"name": "c", "benchmark": "examples", "tables": ["main"], "missing": "not built yet"}]
+    (folder / "plan.json").write_text(json.dumps({"configurations": rows}))
+    return folder / "plan.json"
+
+
+def _fake_run(folder: Path, epochs_done: int, *, best=True, snapshot=True, config=None, torn=False) -> None:
+    folder.mkdir(parents=True)
+    lines = [json.dumps({"epoch": e, "train_return": 1.0}) for e in range(1, epochs_done + 1)]
+    (folder / "metrics.jsonl").write_text("".join(line + "\n" for line in lines) + ('{"epoch": 9' if torn else ""))
+    for name, present in (("best.pt", best), ("snapshot.pt", snapshot)):
+        if present:
+            (folder / name).write_bytes(b"x")
+    if config is not None:
+        (folder / "config.json").write_text(json.dumps(config))
+
+
+def _states(text: str) -> dict[str, tuple[str, str]]:
+    """{run name: (estimated hours, state)} from the dry-run table."""
+    rows = {}
+    for line in text.splitlines()[1:-1]:
+        name, _tables, hours, state = line.split(maxsplit=3)
+        rows[name] = (hours, state)
+    return rows
+
+
+def test_dry_run_lists_each_folder_state_and_the_compute_left(tmp_path, capsys):
+    recipe = TINY | {"ppo": TINY["ppo"] | {"epochs": 10, "snapshot_every_epochs": 2}}
+    plan = _plan(tmp_path, recipe, epoch_s=3600.0)  # one hour per epoch: hours left = epochs left
+    root = tmp_path / "runs"
+    a1 = resolved_config("examples", 1, recipe).to_dict()
+    _fake_run(root / "a_seed0_lot", 10)                           # finished
+    _fake_run(root / "a_seed1_lot", 5, config=a1)                 # interrupted: last snapshot at epoch 4 or later
+    _fake_run(root / "b_seed0", 3, snapshot=False, torn=True)  # killed before its first snapshot
+    _fake_run(root / "b_seed1", 2, config=a1)                 # holds configuration a, not b
+    assert main(["--plan", str(plan), "--seeds", "0", "1", "--out", str(root), "--dry-run"]) == 0
+    out = capsys.readouterr().out
+    rows = _states(out)
+    assert rows["a_seed0_lot"] == ("0.0", "finished (10 epochs)")
+    assert rows["a_seed1_lot"] == ("6.0", "interrupted at epoch 5")  # 10 - 4
+    assert rows["b_seed0"] == ("10.0", "started, no snapshot at epoch 3")  # the torn row 9 is not counted
+    hours, state = rows["b_seed1"]
+    assert state.startswith("config differs: env.connector.mode: folder has 'ensemble', plan has 'fixed'")
+    assert rows["c_seed0"] == ("?", "not available yet: not built yet")
+    assert out.splitlines()[-1].startswith("estimated compute left: 16.0 h")
+    assert "not counting 2 run(s) not available yet" in out.splitlines()[-1]
+    assert main(["--plan", str(plan), "--seeds", "1", "--only", "connector", "--out", str(root), "--dry-run"]) == 0
+    assert list(_states(capsys.readouterr().out)) == ["b_seed1"]
+
+
+def test_each_state_gets_the_train_flags_that_continue_it(tmp_path):
+    plan = _plan(tmp_path, TINY)
+    run = expand(load_plan(str(plan))[0], [0], tmp_path / "runs", ["main"], tmp_path)[0]
+    flags = lambda: [a for a in train_argv(run, tmp_path / "c.json") if a in ("--resume", "--overwrite")]  # noqa
+    assert flags() == []                                  # not started: a plain new run
+    _fake_run(run.run_dir, 0, best=False, snapshot=False)  # killed in its first epoch: an empty metrics.jsonl
+    assert run_state(run).kind == "started, no snapshot" and flags() == ["--overwrite"]
+    (run.run_dir / "snapshot.pt").write_bytes(b"x")
+    assert run_state(run).kind == "interrupted" and flags() == ["--resume"]
+
+
+def test_bad_arguments_are_one_error_line(tmp_path, capsys):
+    plan = _plan(tmp_path, TINY)
+    for argv, message in ((["--plan", str(plan), "--only", "nope"], "--only: unknown table(s) ['nope']"),
+                          (["--plan", "nope"], "--plan: expected one of ['paper'] or a plan .json file"),
+                          (["--plan", str(tmp_path / "missing.json")], "missing.json: cannot read"),
+                          (["--plan", str(plan), "--seeds", "-1"], "--seeds: expected non-negative integers"),
+                          (["--plan", str(plan), "--cpus-per-run", "0"], "--cpus-per-run: expected an integer >= 1"),
+                          (["--plan", str(plan), "--out", str(plan)], "is a file, expected a folder")):
+        assert main([*argv, "--dry-run"]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("error: ") and message in err and "Traceback" not in err
+
+
+def test_paper_plan_recognises_the_shipped_runs():
+    runs = {run.name: run for run in expand(PAPER_PLAN, [0, 1, 2], REPO / "checkpoints" / "runs")}
+    states = {name: run_state(run, active_trainers()) for name, run in runs.items()}
+    for seed in (0, 1):  # finished 240-epoch runs of the recipe: the plan's config equals their config.json
+        assert states[f"factorial_np_seed{seed}_lot"].kind == "finished"
+        assert states[f"factorial_np_seed{seed}_lot"].epoch == 240
+    assert states["factorial_np_seed2_lot"].kind in ("interrupted", "training now", "finished")
+    assert states["site_np_seed0"].kind in ("interrupted", "training now", "finished")
+    assert states["site_np_seed0"].epoch >= 65 and runs["site_np_seed0"].epochs == 240
+    unavailable = sorted(name for name, state in states.items() if state.kind == "not available yet")
+    assert len(unavailable) == 15 and all("hope" in n or "bev" in n for n in unavailable)
+    fixed = resolved_config("factorial", 0, runs["factorial_np_fixed_seed0_lot"].overrides)
+    shipped = json.loads((REPO / "checkpoints/runs/factorial_np_seed0_lot/config.json").read_text())
+    assert fixed.env.connector.mode == "fixed" and fixed.curriculum_region == shipped["curriculum_region"] == "lot"
+    assert fixed.ppo.epochs == 240 and fixed.curriculum_pool == shipped["curriculum_pool"] == 1024
+
+
+def _digests(folder: Path) -> dict[str, str]:
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir())}
+
+
+def _rows(folder: Path) -> list[str]:
+    path = folder / "metrics.jsonl"
+    return path.read_text().splitlines() if path.exists() else []
+
+
+def _wait(condition, timeout: float, what: str) -> None:
+    end = time.time() + timeout
+    while not condition():
+        assert time.time() < end, f"timed out waiting for {what}"
+        time.sleep(0.2)
+
+
+def test_killed_sweep_finishes_only_what_was_unfinished(tmp_path):
+    pytest.importorskip("ray")
+    plan, root = _plan(tmp_path, TINY), tmp_path / "runs"
+    names = ["a_seed0_lot", "a_seed1_lot", "b_seed0", "b_seed1"]
+    argv = [sys.executable, "-m", "experiments.sweep", "--plan", str(plan), "--seeds", "0", "1", "--out", str(root),
+            "--log-dir", str(tmp_path / "logs"), "--cpus-per-run", "1"]
+    env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"} | {"PYTHONPATH": str(REPO)}
+    sweep = subprocess.Popen(argv, cwd=REPO, env=env, start_new_session=True, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL)
+    finished = lambda n: len(_rows(root / n)) == 2 and (root / n / "best.pt").exists()  # noqa: E731
+    midway = lambda n: len(_rows(root / n)) == 1 and (root / n / "snapshot.pt").exists()  # noqa: E731
+    try:
+        _wait(lambda: any(map(finished, names)) and any(map(midway, names)), 600, "one finished and one midway run")
+    finally:
+        os.killpg(sweep.pid, signal.SIGKILL)
+        sweep.wait()
+    _wait(lambda: not set(active_trainers()) & {(root / n).resolve() for n in names}, 60, "the trainers to die")
+    done = [n for n in names if finished(n)]
+    resumable = {n: _rows(root / n) for n in names if n not in done and (root / n / "snapshot.pt").exists()}
+    before = {n: _digests(root / n) for n in done}
+    assert done and resumable
+    result = subprocess.run(argv, cwd=REPO, env=env, capture_output=True, text=True, timeout=600)
+    output = result.stdout + result.stderr
+    assert result.returncode == 0, output[-3000:]
+    assert all(f"{n}: done" in output for n in set(names) - set(done))
+    for n in done:  # finished runs were not touched
+        assert f"{n}: done" not in output and _digests(root / n) == before[n]
+    for n, rows in resumable.items():  # resumed from the snapshot: the epochs before it kept their rows
+        assert _rows(root / n)[:len(rows)] == rows
+        log = (tmp_path / "logs" / f"{n}.log").read_text()
+        assert log.count("--resume") == 1 and log.rstrip().endswith("snapshot.pt")
+    assert all(finished(n) for n in names)
