@@ -1,37 +1,42 @@
-"""Planned-path validators (SPEC §8, paper Table VI): reference-point and full-rectangle footprint validity of a
-plan, on the same geometry as `np_sim.collision.path_valid`."""
+"""Planned-path validators (SPEC §8, paper Table VI) over the one plan validator, `np_sim.validate`.
+
+* reference point: the paper's rule, the env's own check (30 reference points per arc, the 100 Hermite samples);
+* footprint: the full vehicle rectangle at the same samples (the footprint convention as the env scores it);
+* exact: the rectangle (or the reference point) swept continuously along every arc and the Hermite cubic, with no
+  sampling: what a plan that never touches anything between samples passes.
+"""
 
 from __future__ import annotations
 
-from np_sim.collision import path_valid
 from np_sim.plan import Plan
 from np_sim.scene import Scene
+from np_sim.validate import validate_plan as _validate
 from np_sim.vehicle import VehicleSpec
 
-DEFAULT_DS_M = 0.1
-"""Validation sample spacing (m): at most 0.1 m, at least as dense as the paper's 30 samples per arc for arcs
-of 3 m and more, and never coarser than the benchmark convention's 0.1 m spacing."""
+VALIDATOR_NAMES = ("reference_point", "footprint", "exact_reference_point", "exact_footprint")
+"""The keys of ``validate_plan``'s answer."""
 
 
-def plan_poses(plan: Plan, ds_m: float = DEFAULT_DS_M):
-    """(M, 3) poses of ``plan`` (start included) at spacing ≤ ``ds_m`` along it (`Plan.sample`)."""
-    return plan.sample(ds_m)[:, :3]
+def reference_point_valid(scene: Scene, plan: Plan) -> bool:
+    """The paper's rule: every checked reference point strictly inside the boundary and outside every obstacle."""
+    return _validate(scene, plan, "paper").valid
 
 
-def reference_point_valid(scene: Scene, plan: Plan, ds_m: float = DEFAULT_DS_M) -> bool:
-    """Every sampled reference point strictly inside the boundary and outside every obstacle (paper convention)."""
-    return path_valid(scene, plan_poses(plan, ds_m), "reference_point")
+def footprint_valid(scene: Scene, plan: Plan, vehicle: VehicleSpec | None = None) -> bool:
+    """The full vehicle rectangle at every checked pose inside the boundary and disjoint from every obstacle."""
+    return _validate(scene, plan, "footprint_sampled", vehicle=vehicle).valid
 
 
-def footprint_valid(scene: Scene, plan: Plan, ds_m: float = DEFAULT_DS_M, vehicle: VehicleSpec | None = None) -> bool:
-    """The full vehicle rectangle at every sample inside the boundary and disjoint from every obstacle."""
-    return path_valid(scene, plan_poses(plan, ds_m), "footprint", vehicle)
+def exact_valid(scene: Scene, plan: Plan, convention: str = "footprint", vehicle: VehicleSpec | None = None) -> bool:
+    """The body of ``convention`` swept continuously along the plan never touches an obstacle or the boundary."""
+    return _validate(scene, plan, "exact", convention=convention, vehicle=vehicle).valid
 
 
-def validate_plan(scene: Scene, plan: Plan, ds_m: float = DEFAULT_DS_M,
-                  vehicle: VehicleSpec | None = None) -> dict[str, bool]:
-    """{'reference_point': …, 'footprint': …}: both validators; a failed plan is invalid under both."""
+def validate_plan(scene: Scene, plan: Plan, vehicle: VehicleSpec | None = None) -> dict[str, bool]:
+    """{name: valid} for every name of ``VALIDATOR_NAMES``; a failed plan is invalid under all of them."""
     if not plan.success:
-        return {"reference_point": False, "footprint": False}
-    return {"reference_point": reference_point_valid(scene, plan, ds_m),
-            "footprint": footprint_valid(scene, plan, ds_m, vehicle)}
+        return dict.fromkeys(VALIDATOR_NAMES, False)
+    return {"reference_point": reference_point_valid(scene, plan),
+            "footprint": footprint_valid(scene, plan, vehicle),
+            "exact_reference_point": exact_valid(scene, plan, "reference_point"),
+            "exact_footprint": exact_valid(scene, plan, "footprint", vehicle)}
