@@ -5,9 +5,11 @@
 [--out DIR]``
 
 Every frozen start of the benchmark's test scenes (1,080 Factorial, 720 Topology-Stress; ``--per-scene K`` keeps
-the first K of the 40 starts of every scene, ``--limit`` then the first N episodes in scene order) is planned once; the plan is checked by both validators (reference point and full
-footprint, `tracking.validators`) and executed on the MuJoCo vehicle by each controller (`tracking.executor`).
-The table gives, per controller: planning success, planned-path validity under both conventions, executed
+the first K of the 40 starts of every scene, ``--limit`` then the first N episodes in scene order) is planned
+once; the plan is checked by the validators (reference point and full footprint at the benchmark's samples, and
+the exact swept footprint, `tracking.validators`) and executed on the MuJoCo vehicle by each controller
+(`tracking.executor`). The table gives, per controller: planning success, planned-path validity under both
+conventions and the exact swept footprint, executed
 closed-loop success (no body contact, parked within 0.3 m / 10°) on all episodes and on the footprint-valid
 plans, tracking errors (mean over executed runs of the per-run cross-track RMS and max; final pose error of the
 executed successes) and the median real-time factor. Writes ``records.csv``/``records.json`` (one row per
@@ -78,7 +80,8 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
         base = {"scene": scene.name, "start_id": j, "planner": planner, "convention": convention,
                 "plan_success": int(plan.success), "plan_reason": plan.reason, "plan_time_ms": 1e3 * plan.plan_time_s,
                 "L": L, "plan_reversals": rev, "ref_point_valid": int(valid["reference_point"]),
-                "footprint_valid": int(valid["footprint"])}
+                "footprint_valid": int(valid["footprint"]), "exact_ref_point_valid": int(valid["exact_reference_point"]),
+                "exact_footprint_valid": int(valid["exact_footprint"])}
         for controller in controllers:
             rrd = folder / "rrd" / f"{scene.name}_{j:02d}_{controller}.rrd" if n < rrd_episodes else None
             record = execute(scene, plan, controller=controller, render=render and rrd is not None, rerun_path=rrd)
@@ -101,9 +104,9 @@ def _mean(values) -> float:
 
 def format_table(records: list[dict[str, Any]], controllers) -> str:
     """Markdown table, one row per controller (see the module docstring for the columns)."""
-    header = ("| Controller | Plan succ. | Ref.-point valid | Footprint valid | Executed succ. | Executed succ. "
-              "(footprint-valid plans) | Cross-track RMS (m) | Cross-track max (m) | Final error (m / °) | "
-              "Real-time factor |\n|---|---|---|---|---|---|---|---|---|---|")
+    header = ("| Controller | Plan succ. | Ref.-point valid | Footprint valid | Exact footprint valid | Executed succ. | "
+              "Executed succ. (footprint-valid plans) | Cross-track RMS (m) | Cross-track max (m) | "
+              "Final error (m / °) | Real-time factor |\n|---|---|---|---|---|---|---|---|---|---|---|")
     rows = [header]
     for c in controllers:
         rs = [r for r in records if r["controller"] == c]
@@ -112,7 +115,8 @@ def format_table(records: list[dict[str, Any]], controllers) -> str:
         ok = [r for r in rs if r["success"]]
         rows.append(
             f"| {c} | {_mean(r['plan_success'] for r in rs):.3f} | {_mean(r['ref_point_valid'] for r in rs):.3f} | "
-            f"{_mean(r['footprint_valid'] for r in rs):.3f} | {_mean(r['success'] for r in rs):.3f} | "
+            f"{_mean(r['footprint_valid'] for r in rs):.3f} | {_mean(r['exact_footprint_valid'] for r in rs):.3f} | "
+            f"{_mean(r['success'] for r in rs):.3f} | "
             f"{_mean(r['success'] for r in fv):.3f} ({len(fv)}) | "
             f"{_mean(r['cross_track_rms_m'] for r in ran):.3f} | {_mean(r['cross_track_max_m'] for r in ran):.3f} | "
             f"{_mean(r['final_position_error_m'] for r in ok):.3f} / {_mean(r['final_heading_error_deg'] for r in ok):.1f} | "

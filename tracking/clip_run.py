@@ -248,7 +248,8 @@ class ClipRun:
     reference_point_detail: str = ""
     """'' or the first reference-point violation (`reference_point_violation`)."""
     first_plan_valid: dict[str, bool] = field(default_factory=dict)
-    """Both planned-path validators on the first plan against the frame-0 ground truth (movers included)."""
+    """The planned-path validators (`tracking.validators.VALIDATOR_NAMES`: sampled and exact) on the first plan
+    against the frame-0 ground truth (movers included)."""
 
     @property
     def footprint_success(self) -> bool:

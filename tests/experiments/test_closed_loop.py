@@ -37,7 +37,8 @@ def test_two_clips_run_end_to_end_and_the_known_feasible_clip_parks(tmp_path, si
                                                           ("eval-1000009", "hybrid_astar")]
     for key in ("footprint_success", "reference_point_success", "reason", "plan_time_median_ms", "plan_time_first_ms",
                 "plan_calls", "plan_failures", "plan_rejected", "path_length_m", "reversals", "final_position_error_m",
-                "cross_track_rms_m", "sim_time_s", "wall_time_s", "first_contact_object"):
+                "cross_track_rms_m", "sim_time_s", "wall_time_s", "first_contact_object", "first_plan_footprint_valid",
+                "first_plan_exact_footprint_valid"):
         assert key in rows[0]
     hybrid = rows[1]
     assert hybrid["footprint_success"] == "1" and hybrid["reference_point_success"] == "1", hybrid["detail"]
