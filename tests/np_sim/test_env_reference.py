@@ -26,6 +26,7 @@ import pytest
 
 from np_sim.config import ConnectorConfig, EnvConfig, EpisodeConfig
 from np_sim.env import ParkingVectorEnv
+from np_sim.examples import example_scenes
 from np_sim.kernels import step as K
 from np_sim.scene import Scene
 
@@ -49,7 +50,7 @@ CONFIGS = {
 
 # ------------------------------------------------------------------------------------------------ scenes
 def _inline_scenes() -> list[Scene]:
-    """Fallback scenes (circle obstacles, a non-convex polygon) if the example scenes are unavailable."""
+    """Two scenes beside the examples: circle obstacles, non-convex polygons, a slanted boundary."""
     bay = {
         "name": "inline_bay",
         "boundary": [[0, 0], [30, 0], [32, 12], [28, 22], [2, 22], [-2, 10]],
@@ -74,17 +75,8 @@ def _inline_scenes() -> list[Scene]:
     return [Scene.from_dict(bay), Scene.from_dict(lot)]
 
 
-def _scenes() -> list[Scene]:
-    try:
-        from np_sim.examples import example_scenes
-
-        scenes = example_scenes()
-    except Exception:  # another helper may still be writing the examples
-        scenes = []
-    return scenes if scenes else _inline_scenes()
-
-
-SCENES = _scenes()
+SCENES = example_scenes() + _inline_scenes()
+"""The four shipped examples and the two inline scenes; a broken example fails the module loudly."""
 
 
 # ------------------------------------------------------------------------------------------------ case generation
