@@ -9,7 +9,9 @@ evaluation time only: the paper's "ensemble, evaluation only" row; ``centred`` i
 target-aligned first, `np_sim.config.ConnectorConfig.variant`; ``--samples N`` plans with the best of the mean
 rollout and N seeded sampled rollouts, `np_policy.sampling`, beyond the paper; ``--action sample`` plays one
 rollout of sampled actions instead of the mean, as a Tianshou policy acts at test time by default). Success is on
-the full set; path length L, reversals and Δκ (eq:metrics) on the common-success cohort — here the episodes every
+the full set, beside it the exact validity of the planned paths (`np_sim.validate`: the footprint, and the
+reference point, swept continuously; a failure counts as invalid); path length L, reversals and Δκ (eq:metrics)
+on the common-success cohort — here the episodes every
 evaluated seed solved — reported as the mean ± sample SD over seeds; plan time as median and 90th percentile. Writes
 ``records.csv`` and ``records.json`` (one row per episode), ``table.md`` and ``config.json`` into the run folder.
 """
@@ -29,6 +31,7 @@ from np_policy.planner import ACTIONS, NeuralParkerPlanner
 from np_sim.benchmarks import frozen_starts, load_benchmark
 from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int
 from np_sim.config import CONNECTOR_VARIANTS
+from np_sim.validate import plan_valid
 
 
 def evaluate(benchmark: str, checkpoints: list[Path], connector: str | None = None, out: Path | None = None,
@@ -55,7 +58,9 @@ def evaluate(benchmark: str, checkpoints: list[Path], connector: str | None = No
                             "connector": connector or planner.config.env.connector.mode, "checkpoint": str(path),
                             "seed": planner.config.seed, "seed_index": seed_index, "success": int(plan.success),
                             "reason": plan.reason, "L": L, "reversals": rev, "delta_kappa": dk,
-                            "plan_time_ms": 1e3 * plan.plan_time_s})
+                            "plan_time_ms": 1e3 * plan.plan_time_s,
+                            "exact_footprint_valid": int(plan_valid(scenes[k], plan, "exact", "footprint")),
+                            "exact_ref_point_valid": int(plan_valid(scenes[k], plan, "exact", "reference_point"))})
     table = format_table(records, len(checkpoints))
     write_records(folder, records)
     (folder / "table.md").write_text(table + "\n")
@@ -73,11 +78,16 @@ def format_table(records: list[dict[str, Any]], n_seeds: int) -> str:
     solved = [{(r["scene"], r["start_id"]) for r in rows if r["success"]} for rows in by_seed]
     cohort = set.intersection(*solved) if solved else set()
     success = [np.mean([r["success"] for r in rows]) for rows in by_seed]
+    exact = {key: [np.mean([r[key] for r in rows]) for rows in by_seed]
+             for key in ("exact_footprint_valid", "exact_ref_point_valid")}
     metric = {key: [np.mean([r[key] for r in rows if (r["scene"], r["start_id"]) in cohort]) if cohort else np.nan
                     for rows in by_seed] for key in ("L", "reversals", "delta_kappa")}
     times = np.array([r["plan_time_ms"] for r in records])
-    header = "| Method | Succ. | L (m) | Rev. | Δκ | cohort | plan time median / p90 (ms) |\n|---|---|---|---|---|---|---|"
-    row = (f"| {records[0]['method']} ({records[0]['connector']}) | {mean_sd(success)} | {mean_sd(metric['L'])} | "
+    header = ("| Method | Succ. | Exact-valid footprint (ref. point) | L (m) | Rev. | Δκ | cohort | "
+              "plan time median / p90 (ms) |\n|---|---|---|---|---|---|---|---|")
+    row = (f"| {records[0]['method']} ({records[0]['connector']}) | {mean_sd(success)} | "
+           f"{mean_sd(exact['exact_footprint_valid'])} ({mean_sd(exact['exact_ref_point_valid'])}) | "
+           f"{mean_sd(metric['L'])} | "
            f"{mean_sd(metric['reversals'])} | {mean_sd(metric['delta_kappa'])} | {len(cohort)} | "
            f"{np.median(times):.2f} / {np.percentile(times, 90):.2f} |")
     return header + "\n" + row

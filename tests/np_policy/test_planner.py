@@ -67,6 +67,8 @@ def test_evaluate_cli_writes_records_and_table(planner, tmp_path):
                    "--out", str(tmp_path / "eval"), "--limit", "12"])
     rows = list(csv.DictReader((tmp_path / "eval" / "records.csv").open()))
     assert len(rows) == 24 and {r["connector"] for r in rows} == {"fixed"}
+    # exact validity is recorded per episode; a failed plan is never exact-valid
+    assert all(r["exact_footprint_valid"] <= r["exact_ref_point_valid"] <= r["success"] for r in rows)
     assert "| NeuralParker (fixed) |" in result["table"]
     # two identical seeds: the sample SD over seeds is zero
     assert "± 0.000" in result["table"].splitlines()[-1]
