@@ -80,7 +80,8 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
         base = {"scene": scene.name, "start_id": j, "planner": planner, "convention": convention,
                 "plan_success": int(plan.success), "plan_reason": plan.reason, "plan_time_ms": 1e3 * plan.plan_time_s,
                 "L": L, "plan_reversals": rev, "ref_point_valid": int(valid["reference_point"]),
-                "footprint_valid": int(valid["footprint"]), "exact_ref_point_valid": int(valid["exact_reference_point"]),
+                "footprint_valid": int(valid["footprint"]),
+                "exact_ref_point_valid": int(valid["exact_reference_point"]),
                 "exact_footprint_valid": int(valid["exact_footprint"])}
         for controller in controllers:
             rrd = folder / "rrd" / f"{scene.name}_{j:02d}_{controller}.rrd" if n < rrd_episodes else None
@@ -104,8 +105,8 @@ def _mean(values) -> float:
 
 def format_table(records: list[dict[str, Any]], controllers) -> str:
     """Markdown table, one row per controller (see the module docstring for the columns)."""
-    header = ("| Controller | Plan succ. | Ref.-point valid | Footprint valid | Exact footprint valid | Executed succ. | "
-              "Executed succ. (footprint-valid plans) | Cross-track RMS (m) | Cross-track max (m) | "
+    header = ("| Controller | Plan succ. | Ref.-point valid | Footprint valid | Exact footprint valid | "
+              "Executed succ. | Executed succ. (footprint-valid plans) | Cross-track RMS (m) | Cross-track max (m) | "
               "Final error (m / °) | Real-time factor |\n|---|---|---|---|---|---|---|---|---|---|---|")
     rows = [header]
     for c in controllers:

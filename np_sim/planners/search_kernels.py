@@ -118,8 +118,8 @@ def heuristic(x: float, y: float, th: float, gx: float, gy: float, gth: float, k
 
 
 @njit(cache=True, error_model="numpy")
-def rs_shot(geo, x: float, y: float, th: float, gx: float, gy: float, gth: float, kappa_max: float, n_samples: int,
-            footprint: bool, local: np.ndarray, corners: np.ndarray, hit: np.ndarray, rs_out: np.ndarray) -> int:
+def rs_shot(geo, x: float, y: float, th: float, gx: float, gy: float, gth: float, kappa_max: float,
+            n_samples: int, footprint: bool, local: np.ndarray, corners: np.ndarray, hit: np.ndarray, rs_out: np.ndarray) -> int:
     """Analytic expansion: the shortest Reeds–Shepp path to the goal, written to ``rs_out``; returns its arc count
     when every arc passes ``arc_scored``, −1 otherwise."""
     n = rs_arcs_into(x, y, th, gx, gy, gth, kappa_max, 1e-9, rs_out)

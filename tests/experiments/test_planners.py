@@ -97,6 +97,9 @@ def test_cli_smoke_writes_records(tmp_path: Path):
     assert [r["method"] for r in rows] == list(METHODS)
     assert (tmp_path / "table.md").read_text().count("|") > 20
     assert "NP-Guided A* / Hybrid A* median plan time" in result["table"]
+    # every method's success passes the rule it is scored by (OMPL RRT*'s own checks use another spacing)
+    assert all(r["scored_valid"] == r["success"] for r in rows if r["method"] != "ompl_rrtstar")
+    assert "Successes failing the rule they are scored by: Hybrid A* 0, NP-Guided A* 0" in result["table"]
 
 
 def test_learned_methods_need_a_checkpoint(tmp_path: Path, capsys):
