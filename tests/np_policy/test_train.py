@@ -1,11 +1,15 @@
 """Training loop: tiny-budget smoke run, kill-and-resume equality on CPU, checkpoint errors."""
 
+import hashlib
 import json
+import re
+import shutil
 
 import pytest
 import torch
 
-from np_policy.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
+from np_policy.checkpoint import LEGACY_FORMAT, CheckpointError, load_checkpoint, save_checkpoint
+from np_policy.checkpoint import main as checkpoint_main
 from np_policy.train import TrainConfig, Trainer, benchmark_defaults, main, train
 from np_sim.errors import ConfigError
 
@@ -23,11 +27,42 @@ def _rows(path):
     return rows
 
 
-def test_resume_gives_the_same_curve_as_an_uninterrupted_run(tmp_path):
+def _as_v1(path):
+    """Rewrite a checkpoint as the format-v1 writer did (pickled numpy arrays, no digest)."""
+    payload = load_checkpoint(path)
+    torch.save({"format": LEGACY_FORMAT, **payload}, path)
+
+
+def _tree(folder):
+    """SHA-256 of every file under ``folder``, by relative path."""
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+@pytest.fixture(scope="module")
+def finished_run(tmp_path_factory):
+    """A tiny two-epoch run made by the command line: (its folder, its --config file, the rows main returned)."""
+    root = tmp_path_factory.mktemp("finished")
+    cfg = root / "tiny.json"
+    cfg.write_text(json.dumps({k: v for k, v in TINY.items() if k not in ("benchmark", "seed")}))
+    rows = main(["--benchmark", "examples", "--config", str(cfg), "--epochs", "2", "--out", str(root / "run")])
+    return root / "run", cfg, rows
+
+
+def test_resume_gives_the_same_curve_as_an_uninterrupted_run(tmp_path, capsys):
+    """Also from a snapshot written in format v1 and converted by the upgrade command, and with a torn last line
+    in metrics.jsonl (a crash in the middle of a write), which is discarded with a warning."""
     config = TrainConfig.from_dict(TINY)
     train(config, tmp_path / "straight", progress=False)
     train(config, tmp_path / "killed", epochs=2, progress=False)  # "killed" after the epoch-2 snapshot
+    _as_v1(tmp_path / "killed" / "snapshot.pt")
+    with pytest.raises(CheckpointError, match="np_policy.checkpoint upgrade"):
+        train(config, tmp_path / "killed", resume=True, progress=False)
+    assert checkpoint_main(["upgrade", str(tmp_path / "killed" / "snapshot.pt")]) == 0
+    metrics = tmp_path / "killed" / "metrics.jsonl"
+    metrics.write_text(metrics.read_text() + '{"epoch": 3, "env_st')
     train(config, tmp_path / "killed", resume=True, progress=False)
+    assert f"warning: {metrics}: discarding its torn last line 3" in capsys.readouterr().err
     a, b = _rows(tmp_path / "straight"), _rows(tmp_path / "killed")
     assert len(a) == len(b) == 4
     assert a == b
@@ -52,17 +87,18 @@ def test_a_run_resumes_after_a_field_with_a_default_was_added_to_the_config(tmp_
         train(config, tmp_path / "run", resume=True, progress=False)
 
 
-def test_cli_writes_metrics_curves_and_checkpoints(tmp_path):
-    cfg = tmp_path / "tiny.json"
-    cfg.write_text(json.dumps({k: v for k, v in TINY.items() if k not in ("benchmark", "seed")}))
-    rows = main(["--benchmark", "examples", "--config", str(cfg), "--epochs", "2", "--out", str(tmp_path / "run")])
+def test_cli_writes_metrics_curves_and_checkpoints(finished_run):
+    run, _, rows = finished_run
     assert [r["epoch"] for r in rows] == [1, 2]
     for r in rows:  # the epoch's wall-clock split into its phases
         phases = r["collect_s"] + r["update_s"] + r["selection_s"]
         assert min(r["collect_s"], r["update_s"], r["selection_s"]) > 0 and phases <= r["epoch_s"] < phases + 0.5
     for name in ("metrics.jsonl", "curves.png", "best.pt", "snapshot.pt", "config.json"):
-        assert (tmp_path / "run" / name).stat().st_size > 0
-    best = load_checkpoint(tmp_path / "run" / "best.pt", expected_config=TrainConfig.from_dict(TINY | {"seed": 0}).to_dict())
+        assert (run / name).stat().st_size > 0
+    assert [json.loads(line)["epoch"] for line in (run / "metrics.jsonl").read_text().splitlines()] == [1, 2]
+    assert sorted(p.name for p in run.iterdir()) == ["best.pt", "config.json", "curves.png", "metrics.jsonl",
+                                                     "snapshot.pt"]  # no temporary file left behind
+    best = load_checkpoint(run / "best.pt", expected_config=TrainConfig.from_dict(TINY | {"seed": 0}).to_dict())
     assert {"model", "config", "return_rms", "epoch", "selection_reward"} <= set(best)
 
 
@@ -213,3 +249,93 @@ def test_the_curriculum_pool_can_cover_the_whole_lot():
     assert any(outside)
     with pytest.raises(ConfigError, match=r"TrainConfig.curriculum_region: expected one of \('start_region', 'lot'\)"):
         TrainConfig(curriculum_region="everywhere")
+
+
+def test_rerunning_a_finished_run_without_resume_changes_no_file(finished_run, capsys):
+    run, cfg, _ = finished_run
+    before = _tree(run)
+    argv = ["--benchmark", "examples", "--config", str(cfg), "--out", str(run)]
+    for extra in ([], ["--epochs", "1"], ["--init", str(run / "best.pt")]):
+        with pytest.raises(SystemExit) as exit_info:
+            main(argv + extra)
+        assert exit_info.value.code == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"error: {run}: already holds a training run (metrics.jsonl, snapshot.pt, best.pt)")
+        assert "--resume" in err and "--overwrite" in err and len(err.strip().splitlines()) == 1
+    with pytest.raises(SystemExit):  # resuming a run already at --epochs changes nothing either
+        main(argv + ["--resume", "--epochs", "1"])
+    assert "the snapshot is already at epoch 2" in capsys.readouterr().err
+    assert [r["epoch"] for r in main(argv + ["--resume", "--epochs", "2"])] == [1, 2]  # nothing left to train
+    assert _tree(run) == before
+
+
+def test_overwrite_removes_the_run_files_and_keeps_the_rest(tmp_path):
+    from np_policy.train import prepare_run_folder
+
+    run = tmp_path / "run"
+    run.mkdir()
+    for name in ("metrics.jsonl", "snapshot.pt", "best.pt", "curves.png", "config.json", "notes.txt"):
+        (run / name).write_text(name)
+    with pytest.raises(ConfigError, match="already holds a training run"):
+        prepare_run_folder(run, resume=False, overwrite=False)
+    assert len(list(run.iterdir())) == 6
+    prepare_run_folder(run, resume=False, overwrite=True)
+    assert [p.name for p in run.iterdir()] == ["notes.txt"]
+    prepare_run_folder(tmp_path / "new", resume=False, overwrite=False)
+    assert (tmp_path / "new").is_dir()
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(ConfigError, match="expected a run folder, found a file"):
+        prepare_run_folder(tmp_path / "file", resume=False, overwrite=True)
+
+
+def test_resume_tolerates_only_a_torn_last_metrics_line(finished_run, tmp_path, capsys):
+    """The tear itself is discarded in the kill-and-resume test above; damage before the last line is an error."""
+    run, _, _ = finished_run
+    copy = tmp_path / "run"
+    shutil.copytree(run, copy)
+    metrics = copy / "metrics.jsonl"
+    whole = metrics.read_text()
+    metrics.write_text(whole + '{"epoch": 3, "env_steps": 7')
+    rows = train(TrainConfig.from_dict(TINY | {"seed": 0}), copy, epochs=2, resume=True, progress=False)
+    assert [r["epoch"] for r in rows] == [1, 2]
+    assert f"warning: {metrics}: discarding its torn last line 3" in capsys.readouterr().err
+    metrics.write_text('{"epoch": 1}\n{"epo\n{"epoch": 2}\n')
+    with pytest.raises(CheckpointError, match=r"metrics.jsonl: line 2 is not a metrics row"):
+        train(TrainConfig.from_dict(TINY | {"seed": 0}), copy, epochs=2, resume=True, progress=False)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--epochs", "0"], r"--epochs: expected an integer from 1 to ppo.epochs=4 .*got 0"),
+    (["--epochs", "-2"], r"--epochs: expected an integer from 1 to ppo.epochs=4 .*got -2"),
+    (["--epochs", "5"], r"--epochs: expected an integer from 1 to ppo.epochs=4 .*got 5"),
+    (["--resume"], r"nothing to resume, no snapshot.pt in it"),
+    (["--resume", "--overwrite"], r"give one"),
+])
+def test_bad_arguments_are_one_error_line_and_write_nothing(tmp_path, capsys, args, message):
+    cfg = tmp_path / "tiny.json"
+    cfg.write_text(json.dumps({k: v for k, v in TINY.items() if k not in ("benchmark", "seed")}))
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--benchmark", "examples", "--config", str(cfg), "--out", str(tmp_path / "run"), *args])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and len(err.strip().splitlines()) == 1
+    assert re.search(message, err), err
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("content, message", [
+    ("[1, 2]", r"tiny.json: expected a JSON object of TrainConfig fields, got a list"),
+    ('{"ppo": {"epochs": 2.5}}', r"TrainConfig.ppo.epochs: expected an integer, got 2.5"),
+    ('{"seed": 1, "ppo": {"epohcs": 3}}', r"unknown key\(s\) \['epohcs'\]"),
+    ('{"ppo": [1]}', r"TrainConfig.ppo: expected a mapping"),
+    ("{not json", r"tiny.json: not a readable JSON file"),
+])
+def test_bad_config_files_are_one_error_line(tmp_path, capsys, content, message):
+    cfg = tmp_path / "tiny.json"
+    cfg.write_text(content)
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--benchmark", "examples", "--config", str(cfg), "--out", str(tmp_path / "run")])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and len(err.strip().splitlines()) == 1 and re.search(message, err), err
+    assert not (tmp_path / "run").exists()
