@@ -33,7 +33,7 @@ def measure(checkpoint: str | Path, episodes: int | None = None, seed: int = 0, 
     """Median / p90 plan time (ms), success and arcs per query over ``episodes`` seeded frozen starts (all
     1,080 by default), and the compiled policy's µs per call on the observations those queries saw; ``samples``
     > 0 times the best-of-N planner."""
-    planner = NeuralParkerPlanner.from_checkpoint(checkpoint, samples=samples)
+    planner = NeuralParkerPlanner.from_checkpoint(checkpoint, samples=samples, benchmark="factorial")
     scenes = load_benchmark("factorial", "test")
     starts = frozen_starts("factorial")
     pairs = [(i, j) for i in range(len(scenes)) for j in range(starts.shape[1])]
