@@ -6,7 +6,8 @@ footprint convention) is its state-validity checker, and motions are checked at 
 Reeds–Shepp curves (OMPL's discrete motion validator). The planner is RRT* (Karaman & Frazzoli 2011,
 asymptotically optimal, path-length objective), run for the whole time budget — by default the Hybrid A* budget.
 Its solution states are joined by our shortest Reeds–Shepp paths (``np_sim.reeds_shepp``) into arcs and
-re-checked with our sampling, so the returned plan satisfies the same validity contract as Hybrid A*'s.
+validated like Hybrid A*'s before a success is claimed (`np_sim.validate.validation_failure`: the rule the plan is
+scored by, and the exact swept footprint under the footprint convention).
 """
 
 from __future__ import annotations
@@ -23,10 +24,10 @@ from np_sim.kernels.collision import pose_valid
 from np_sim.kinematics import arc_step, wrap_angle
 from np_sim.plan import Plan
 from np_sim.planners.hybrid_astar import HybridAStarConfig
-from np_sim.planners.search_kernels import arc_checked
 from np_sim.reeds_shepp import shortest_path
 from np_sim.scene import Scene
 from np_sim.scene_arrays import packed_scene
+from np_sim.validate import validation_failure
 from np_sim.vehicle import VehicleSpec
 
 
@@ -111,19 +112,16 @@ class OmplPeer:
         states = [np.array([s.getX(), s.getY(), s.getYaw()]) for s in (path.getState(i) for i in range(path.getStateCount()))]
         arcs = np.concatenate([shortest_path(a, b_, c.vehicle.kappa_max) for a, b_ in zip(states[:-1], states[1:])])
         arcs = arcs.reshape(-1, 2)
-        reason = self._check(geo, footprint, p, arcs, goal)
+        reason = self._check(scene, p, arcs, goal)
         return Plan(start=p, arcs=arcs, success=reason == "", reason=reason, plan_time_s=time.perf_counter() - t0,
                     expanded_nodes=vertices)
 
-    def _check(self, geo, footprint: bool, start: np.ndarray, arcs: np.ndarray, goal: np.ndarray) -> str:
-        """'' when every arc is valid at our check spacing and the end meets the goal tolerance, else the reason."""
-        corners = np.empty((4, 2))
+    def _check(self, scene: Scene, start: np.ndarray, arcs: np.ndarray, goal: np.ndarray) -> str:
+        """'' when the end meets the goal tolerance and the plan passes its validation, else the reason."""
         pose = start
         for kappa, length in arcs:
-            if not arc_checked(geo, pose[0], pose[1], pose[2], kappa, length, self.config.check_spacing_m, footprint,
-                               self._local, corners):
-                return "collision"
             pose = arc_step(pose, kappa, length)
         if math.hypot(*(pose[:2] - goal[:2])) > 0.1 or abs(wrap_angle(pose[2] - goal[2])) > math.radians(10.0):
             return "goal missed"
-        return ""
+        return validation_failure(scene, Plan(start=start, arcs=arcs, success=True), self.convention,
+                                  self.config.vehicle)

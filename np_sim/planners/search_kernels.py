@@ -48,14 +48,6 @@ S_HEAP_SIZE, S_N_NODES, S_EXPANDED, S_STAMP, S_N_RS = range(5)
 
 
 @njit(cache=True, error_model="numpy")
-def arc_checked(geo, x: float, y: float, th: float, kappa: float, length: float, ds: float, footprint: bool,
-                local: np.ndarray, corners: np.ndarray) -> bool:
-    """The arc (κ, l) from (x, y, θ) is valid at its ⌈|l|/Δs⌉ evenly spaced samples (end included)."""
-    n = max(1, int(math.ceil(abs(length) / ds)))
-    return arc_valid(geo, 0, x, y, th, kappa, length, n, footprint, local, corners)
-
-
-@njit(cache=True, error_model="numpy")
 def arc_scored(geo, x: float, y: float, th: float, kappa: float, length: float, n_samples: int, footprint: bool,
                local: np.ndarray, corners: np.ndarray, hit: np.ndarray) -> bool:
     """The arc (κ, l) from (x, y, θ) passes the rule its plan is scored by: the footprint swept exactly (footprint

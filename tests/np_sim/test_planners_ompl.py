@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from np_sim.collision import path_valid
 from np_sim.errors import ConfigError
 from np_sim.examples import example_path
 from np_sim.kinematics import arc_step, wrap_angle
 from np_sim.scene import Scene
+from np_sim.validate import scoring_rule, validate_plan
 
 pytest.importorskip("ompl")
 
@@ -24,7 +24,8 @@ def test_rrtstar_plan_is_valid_and_reaches_the_target(convention):
     peer = OmplPeer(OmplPeerConfig(time_budget_s=0.5, seed=1), convention)
     plan = peer.plan(scene, [10.0, 10.0, 0.0])
     assert plan.success, plan.reason
-    assert path_valid(scene, plan.sample(peer.config.check_spacing_m)[:, :3], convention)
+    assert validate_plan(scene, plan, scoring_rule(convention)).valid
+    assert convention == "reference_point" or validate_plan(scene, plan, "exact", convention="footprint").valid
     end = np.asarray(plan.start, float)
     for kappa, length in plan.arcs:
         end = arc_step(end, kappa, length)
