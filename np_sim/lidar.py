@@ -1,7 +1,8 @@
 """Ego-centric LiDAR (paper §III-B, eq:lidar-clearance, App. A).
 
 Beam i points at θ + 2πi/n (beam 0 along the heading, counter-clockwise). ``d_i`` is the reference-point
-distance to the first obstacle or boundary crossing (exact, zero-tolerance segment-bound tests: corners hit; circles as 16-segment rings),
+distance to the first obstacle or boundary crossing (exact, zero-tolerance segment-bound tests: corners hit;
+circles as 16-segment rings),
 capped at the range; ``b_i`` the distance from the reference point to the footprint rectangle along the beam;
 the policy sees ``max(d_i − b_i, 0)``, written once, in the observation kernel (``np_sim.kernels.step``).
 """

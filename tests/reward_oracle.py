@@ -34,9 +34,11 @@ def effective_kappa_change(arcs) -> float:
     return float(np.abs(np.diff(steer)).sum())
 
 
-def hermite_score(delta_kappa_h: float, length_h: float, ensemble: bool, config: RewardConfig = RewardConfig()) -> float:
+def hermite_score(delta_kappa_h: float, length_h: float, ensemble: bool,
+                  config: RewardConfig = RewardConfig()) -> float:
     """p_H of eq:terminal-reward: −(0.05Δκ_H + 10L_H + 5), floored at −500 for the ensemble only."""
-    p = -(config.hermite_kappa_weight * delta_kappa_h + config.hermite_length_weight * length_h + config.hermite_constant)
+    p = -(config.hermite_kappa_weight * delta_kappa_h + config.hermite_length_weight * length_h
+          + config.hermite_constant)
     return float(max(p, config.hermite_floor)) if ensemble else float(p)
 
 

@@ -185,7 +185,8 @@ def test_ppo_config_defaults_are_table_v():
     c = PPOConfig()
     assert (c.learning_rate, c.gamma, c.gae_lambda, c.clip_coef, c.vf_coef, c.ent_coef, c.max_grad_norm) == (
         3e-4, 0.99, 0.95, 0.15, 0.25, 0.005, 0.5)
-    assert (c.epochs, c.steps_per_epoch, c.steps_per_collect, c.repeats, c.batch_size) == (240, 60_000, 16_384, 10, 8_192)
+    assert (c.epochs, c.steps_per_epoch, c.steps_per_collect, c.repeats, c.batch_size) == (
+        240, 60_000, 16_384, 10, 8_192)
     assert (c.num_train_envs, c.num_test_envs, c.steps_per_env_per_collect, c.collects_per_epoch) == (128, 32, 128, 4)
     assert c.lr_at(0) == 3e-4 and c.lr_at(c.total_updates) == 0.0
     assert c.lr_at(c.total_updates // 2) == pytest.approx(1.5e-4)

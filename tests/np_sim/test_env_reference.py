@@ -30,7 +30,8 @@ from np_sim.examples import example_scenes
 from np_sim.kernels import step as K
 from np_sim.scene import Scene
 
-_spec = importlib.util.spec_from_file_location("reference_step", Path(__file__).resolve().parents[1] / "reference_step.py")
+_spec = importlib.util.spec_from_file_location("reference_step",
+                                               Path(__file__).resolve().parents[1] / "reference_step.py")
 ref = importlib.util.module_from_spec(_spec)
 sys.modules.setdefault("reference_step", ref)
 _spec.loader.exec_module(ref)
@@ -163,7 +164,8 @@ class EpisodeState:
         return (f"scene={self.scene.name!r} (index {self.scene_index}), start={self.start.tolist()}, "
                 f"actions before={[a.tolist() for a in self.actions]}, pose={self.pose.tolist()}, "
                 f"prev_kappa={self.prev_kappa!r}, prev_length={self.prev_length!r}, first_arc={self.first_arc}, "
-                f"n_rev={self.n_rev}, dk_eff={self.dk_eff!r}, n_arcs={self.n_arcs}, action={np.asarray(action).tolist()}")
+                f"n_rev={self.n_rev}, dk_eff={self.dk_eff!r}, n_arcs={self.n_arcs}, "
+                f"action={np.asarray(action).tolist()}")
 
 
 class Tally:
@@ -359,7 +361,8 @@ def test_truncation_matches_reference():
             actions.append(a)
         actions = np.stack(actions)
         results = [ref.reference_step(SCENES[st.scene_index], st.pose, st.prev_kappa, st.prev_length, st.first_arc,
-                                      st.n_rev, st.dk_eff, st.n_arcs, actions[i], config) for i, st in enumerate(states)]
+                                      st.n_rev, st.dk_eff, st.n_arcs, actions[i], config)
+                   for i, st in enumerate(states)]
         out = env.step(actions)
         for i, st in enumerate(states):
             if alive[i]:

@@ -13,14 +13,17 @@ from np_sim.frames import pose_to_target_frame
 from np_sim.hermite import connect, discrete_curvature, hermite_curve
 from np_sim.scene import Scene
 
-OPEN_LOT = {"boundary": [[-20, -25], [20, -25], [20, 25], [-20, 25]], "obstacles": [], "target": [0.0, 0.0, math.pi / 2]}
+OPEN_LOT = {"boundary": [[-20, -25], [20, -25], [20, 25], [-20, 25]], "obstacles": [],
+            "target": [0.0, 0.0, math.pi / 2]}
 
 
 def analytic_curvature(g0, g1, d0, d1, t):
     """|x'y'' − y'x''| / |g'|³ of the cubic Hermite curve, from its exact derivatives."""
     g0, g1, d0, d1 = map(np.asarray, (g0, g1, d0, d1))
-    d1t = (6 * t**2 - 6 * t)[:, None] * g0 + (6 * t - 6 * t**2)[:, None] * g1 + (3 * t**2 - 4 * t + 1)[:, None] * d0 + (3 * t**2 - 2 * t)[:, None] * d1
-    d2t = (12 * t - 6)[:, None] * g0 + (6 - 12 * t)[:, None] * g1 + (6 * t - 4)[:, None] * d0 + (6 * t - 2)[:, None] * d1
+    d1t = ((6 * t**2 - 6 * t)[:, None] * g0 + (6 * t - 6 * t**2)[:, None] * g1
+           + (3 * t**2 - 4 * t + 1)[:, None] * d0 + (3 * t**2 - 2 * t)[:, None] * d1)
+    d2t = ((12 * t - 6)[:, None] * g0 + (6 - 12 * t)[:, None] * g1
+           + (6 * t - 4)[:, None] * d0 + (6 * t - 2)[:, None] * d1)
     cross = d1t[:, 0] * d2t[:, 1] - d1t[:, 1] * d2t[:, 0]
     return np.abs(cross) / np.linalg.norm(d1t, axis=1) ** 3
 

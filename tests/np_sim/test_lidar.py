@@ -33,7 +33,9 @@ def ray_distance_to(geom, origin, phi, length=100.0) -> float:
 # ---------------------------------------------------------------------------------------------- footprint ranges
 
 
-@pytest.mark.parametrize("spec", [VehicleSpec(), VehicleSpec(wheelbase_m=1.5, front_overhang_m=0.4, rear_overhang_m=0.6, width_m=1.2)])
+@pytest.mark.parametrize(
+    "spec", [VehicleSpec(), VehicleSpec(wheelbase_m=1.5, front_overhang_m=0.4, rear_overhang_m=0.6, width_m=1.2)]
+)
 @pytest.mark.parametrize("n_beams", [120, 7, 64])
 def test_footprint_ranges_match_shapely(spec, n_beams):
     b = footprint_ranges(spec, n_beams)
