@@ -120,7 +120,7 @@ def run_sweep(todo: list[RunSpec], args) -> list[dict[str, Any]]:
     since = time.time()
     results = []
     with tqdm(total=len(todo), unit="run", desc="sweep") as bar:
-        while pending:
+        while pending:  # a KeyboardInterrupt here ends the local Ray (atexit), whose workers' trainers die with it
             done, _ = ray.wait(list(pending), num_returns=1, timeout=POLL_S)
             for ref in done:
                 run = pending.pop(ref)
@@ -183,7 +183,13 @@ def main(argv=None) -> int:
     if not todo:
         print("sweep: nothing to train")
         return 0
-    failed = [r for r in run_sweep(todo, args) if r["rc"] != 0]
+    try:
+        results = run_sweep(todo, args)
+    except KeyboardInterrupt:
+        print("sweep: interrupted; its trainers are stopped. Run the same command again to continue: finished runs "
+              "are skipped, interrupted ones resume from their snapshot.", file=sys.stderr)
+        return 130
+    failed = [r for r in results if r["rc"] != 0]
     for result in failed:
         print(f"{result['run']}: training failed (exit {result['rc']}); end of {result['log']}:\n{result['tail']}",
               file=sys.stderr)
