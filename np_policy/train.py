@@ -490,6 +490,9 @@ def _resume(trainer: Trainer, config: TrainConfig, out: Path, last: int) -> list
     """Restore ``trainer`` from ``out/snapshot.pt`` and return the metrics rows up to its epoch."""
     snapshot = out / "snapshot.pt"
     payload = load_checkpoint(snapshot)
+    missing = sorted(set(trainer.state()) - set(payload) - {"init_checkpoint"})
+    if missing:
+        raise CheckpointError(f"{snapshot}: not a training snapshot, it lacks {missing} (a best.pt holds weights only)")
     # a field added to TrainConfig after the run started is stored without it: compare with its default
     check_config(snapshot, config.to_dict(), checkpoint_config(snapshot, payload).to_dict())
     trainer.restore(payload, snapshot)

@@ -299,6 +299,10 @@ def test_resume_tolerates_only_a_torn_last_metrics_line(finished_run, tmp_path, 
     rows = train(TrainConfig.from_dict(TINY | {"seed": 0}), copy, epochs=2, resume=True, progress=False)
     assert [r["epoch"] for r in rows] == [1, 2]
     assert f"warning: {metrics}: discarding its torn last line 3" in capsys.readouterr().err
+    shutil.copy(copy / "best.pt", copy / "snapshot.pt")  # weights only: named, not a KeyError
+    with pytest.raises(CheckpointError, match=r"snapshot.pt: not a training snapshot, it lacks \['best_reward'"):
+        train(TrainConfig.from_dict(TINY | {"seed": 0}), copy, epochs=2, resume=True, progress=False)
+    shutil.copy(run / "snapshot.pt", copy / "snapshot.pt")
     metrics.write_text('{"epoch": 1}\n{"epo\n{"epoch": 2}\n')
     with pytest.raises(CheckpointError, match=r"metrics.jsonl: line 2 is not a metrics row"):
         train(TrainConfig.from_dict(TINY | {"seed": 0}), copy, epochs=2, resume=True, progress=False)
