@@ -39,8 +39,9 @@ RECIPE_FILE = "recipe.json"
 """The one NeuralParker recipe every Factorial and Topology-Stress NeuralParker row merges its overrides over."""
 FACTORIAL_EPOCH_S = 46.8
 """Measured wall-clock seconds per epoch of the Factorial recipe on this 2-core machine (compute estimates)."""
-SITE_EPOCH_S = 5 * 3600 / 240
-"""About 5 h per 240-epoch site run on this machine (compute estimates)."""
+SITE_EPOCH_S = 83.0
+"""Seconds per epoch of the site run on this machine: its last ten epochs (65,536 steps each, ``steps_per_s`` of
+its ``metrics.jsonl``) took 81–88 s, about 5.5 h per 240-epoch run (compute estimates)."""
 TABLES = {
     "main": "Fig. 3, main comparison on the Factorial benchmark",
     "staged": "Table II, unified versus staged planning",
@@ -319,7 +320,7 @@ def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
         shown = "?" if hours is None else f"{hours:.1f}"
         lines.append(f"{run.name:<38} {','.join(run.config.tables):<34} {shown:>11}  {describe(state)}")
     unknown = sum(estimate_hours(r, s) is None for r, s in zip(runs, states))
-    lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine ({FACTORIAL_EPOCH_S} s per Factorial "
-                 f"epoch, about {SITE_EPOCH_S * 240 / 3600:.0f} h per site run; an estimate)"
+    lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine (an estimate: {FACTORIAL_EPOCH_S} s "
+                 f"per Factorial or Topology-Stress epoch, {SITE_EPOCH_S} s per site epoch)"
                  + (f", not counting {unknown} run(s) not available yet" if unknown else ""))
     return "\n".join(lines)
