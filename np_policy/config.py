@@ -119,7 +119,8 @@ class PPOConfig:
     the update faster on CPU (``python -m np_policy.bench_update --chunks``). Not a recipe parameter: runs trained
     before this field existed passed the whole minibatch at once."""
     buffer_size: int = 131_072
-    """Replay-buffer capacity of the Tianshou recipe (≥ ``steps_per_collect``; on-policy data is cleared per collect)."""
+    """Replay-buffer capacity of the Tianshou recipe (≥ ``steps_per_collect``; on-policy data is cleared per
+    collect)."""
     num_train_envs: int = 128
     """Parallel training environments."""
     num_test_envs: int = 32
