@@ -166,7 +166,8 @@ def _exact_segments(geo, start, arcs, plan, footprint, local, n):
         return -1, 0.0, hit
     x, y, th = start
     for i, (kappa, length) in enumerate(arcs):
-        u = swept.swept_arc_contact(geo, 0, x, y, th, kappa, length, footprint, local, EXACT_TOLERANCE_M, hit)
+        u = swept.swept_arc_contact(geo, 0, x, y, th, kappa, length, footprint, local, EXACT_TOLERANCE_M, True,
+                                    hit)
         if u >= 0.0:
             return i, u, hit
         x, y, th = arc_point(x, y, th, kappa, length)

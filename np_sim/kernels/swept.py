@@ -42,7 +42,6 @@ from numba import njit
 
 from np_sim.kernels.collision import pose_valid
 from np_sim.kernels.geometry import INSIDE, OUTSIDE, footprint_corners, point_in_polygon, segments_intersect
-from np_sim.kernels.kinematics import arc_point
 
 EXACT_TOLERANCE_M = 1e-9
 """Distance (m) at or below which the exact rule counts a contact: touching is a violation, and so is a near miss
@@ -262,9 +261,10 @@ def _record(best, u, kind, index, px, py, hit):
 
 
 @njit(cache=True, error_model="numpy")
-def _ring_contact(motion, body, n_body, ring, n_ring, kind, index, eps, box, best, hit):
+def _ring_contact(motion, body, n_body, ring, n_ring, kind, index, eps, box, earliest, best, hit):
     """Contacts of the body (points ``body[:n_body]``, edges when n_body > 1) with the closed ring's edges and
-    vertices (each edge or vertex outside the culling ``box`` skipped); returns the earliest u so far."""
+    vertices (each edge or vertex outside the culling ``box`` skipped); returns the earliest u so far (without
+    ``earliest``, the first contact found)."""
     for j in range(n_ring):
         ax = ring[j, 0]
         ay = ring[j, 1]
@@ -277,6 +277,8 @@ def _ring_contact(motion, body, n_body, ring, n_ring, kind, index, eps, box, bes
             if u >= 0.0:
                 qx, qy = _moved(motion, body[i, 0], body[i, 1], u)
                 best = _record(best, u, kind, index, qx, qy, hit)
+                if best >= 0.0 and not earliest:
+                    return best
     if n_body < 2:
         return best
     for j in range(n_ring):
@@ -288,6 +290,8 @@ def _ring_contact(motion, body, n_body, ring, n_ring, kind, index, eps, box, bes
             i2 = (i + 1) % n_body
             u = _path_segment_contact(motion, vx, vy, -1.0, body[i, 0], body[i, 1], body[i2, 0], body[i2, 1], eps)
             best = _record(best, u, kind, index, vx, vy, hit)
+            if best >= 0.0 and not earliest:
+                return best
     return best
 
 
@@ -316,11 +320,13 @@ def _disc_contact(motion, body, n_body, ox, oy, r, index, eps, best, hit):
 
 
 @njit(cache=True, error_model="numpy")
-def swept_arc_contact(geo, k, x, y, th, kappa, length, footprint, local, eps, hit):
+def swept_arc_contact(geo, k, x, y, th, kappa, length, footprint, local, eps, earliest, hit):
     """First parameter u ∈ [0, 1] at which the body (the rectangle ``local`` when ``footprint``, else the reference
     point) moved along the arc (κ, l) from (x, y, θ) comes within ``eps`` of an obstacle or the boundary of scene
-    k, or −1 when it never does (the pose at u = 0 is assumed clear; see ``pose_clear``). ``hit`` (4,) receives the
-    contact's kind (KIND_*), packed index and world position."""
+    k, or −1 when it never does (the pose at u = 0 is assumed clear; see ``body_clear``). Without ``earliest`` the
+    first contact found is returned (a search needs only the verdict). ``hit`` (4,) receives the contact's kind
+    (KIND_*), packed index and world position. Obstacles and edges outside the swept body's bounding box (its
+    corners' paths, ``_swept_box``) are skipped."""
     boundary, n_boundary, poly, poly_nv, n_poly, aabb, circle, n_circle = (geo[0], geo[1], geo[2], geo[3], geo[4],
                                                                            geo[5], geo[6], geo[7])
     if length == 0.0:
@@ -338,27 +344,66 @@ def swept_arc_contact(geo, k, x, y, th, kappa, length, footprint, local, eps, hi
     motion = np.empty(6)
     arc_motion(x, y, th, kappa, length, rho, motion)
     eps = eps + motion[4]
-    mx, my, _ = _mid_pose(x, y, th, kappa, length)
-    reach = 0.5 * abs(length) + rho + eps
-    box = np.array([mx - reach, my - reach, mx + reach, my + reach])
-    best = _ring_contact(motion, body, n_body, boundary[k], n_boundary[k], KIND_BOUNDARY, 0, eps, box, -1.0, hit)
+    box = np.empty(4)
+    _swept_box(motion, body, n_body, eps, box)
+    best = _ring_contact(motion, body, n_body, boundary[k], n_boundary[k], KIND_BOUNDARY, 0, eps, box, earliest,
+                         -1.0, hit)
     for j in range(n_poly[k]):
+        if best >= 0.0 and not earliest:
+            return best
         if aabb[k, j, 2] < box[0] or aabb[k, j, 0] > box[2] or aabb[k, j, 3] < box[1] or aabb[k, j, 1] > box[3]:
             continue
-        best = _ring_contact(motion, body, n_body, poly[k, j], poly_nv[k, j], KIND_POLYGON, j, eps, box, best, hit)
+        best = _ring_contact(motion, body, n_body, poly[k, j], poly_nv[k, j], KIND_POLYGON, j, eps, box, earliest,
+                             best, hit)
     for j in range(n_circle[k]):
+        if best >= 0.0 and not earliest:
+            return best
         ox = circle[k, j, 0]
         oy = circle[k, j, 1]
-        if math.hypot(ox - mx, oy - my) > reach + circle[k, j, 2]:
+        r = circle[k, j, 2]
+        if ox + r < box[0] or ox - r > box[2] or oy + r < box[1] or oy - r > box[3]:
             continue
-        best = _disc_contact(motion, body, n_body, ox, oy, circle[k, j, 2], j, eps, best, hit)
+        best = _disc_contact(motion, body, n_body, ox, oy, r, j, eps, best, hit)
     return best
 
 
 @njit(cache=True, error_model="numpy")
-def _mid_pose(x, y, th, kappa, length):
-    """The pose halfway along the arc: every point of the arc lies within |l|/2 of it."""
-    return arc_point(x, y, th, kappa, 0.5 * length)
+def _swept_box(motion, body, n_body, margin, box):
+    """Bounding box (x0, y0, x1, y1) of the body swept by the motion, grown by ``margin``: the extremes of a convex
+    body along an axis are at its corners, and a corner's path is a segment (its ends) or an arc (its ends and the
+    axis-extreme points of its circle inside the swept angle)."""
+    box[0] = math.inf
+    box[1] = math.inf
+    box[2] = -math.inf
+    box[3] = -math.inf
+    for i in range(n_body):
+        px = body[i, 0]
+        py = body[i, 1]
+        for u in (0.0, 1.0):
+            qx, qy = _moved(motion, px, py, u)
+            _grow(box, qx, qy)
+        if motion[0] > 0.0:
+            continue
+        cx = motion[1]
+        cy = motion[2]
+        r = math.hypot(px - cx, py - cy)
+        phi0 = math.atan2(py - cy, px - cx)
+        for ax, ay in ((cx + r, cy), (cx, cy + r), (cx - r, cy), (cx, cy - r)):
+            if _angle_u(ax, ay, cx, cy, phi0, motion[3], 0.0) >= 0.0:
+                _grow(box, ax, ay)
+    box[0] -= margin
+    box[1] -= margin
+    box[2] += margin
+    box[3] += margin
+
+
+@njit(cache=True, error_model="numpy")
+def _grow(box, x, y):
+    """Extend the box (x0, y0, x1, y1) to hold (x, y)."""
+    box[0] = min(box[0], x)
+    box[1] = min(box[1], y)
+    box[2] = max(box[2], x)
+    box[3] = max(box[3], y)
 
 
 @njit(cache=True, error_model="numpy")

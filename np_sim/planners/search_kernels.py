@@ -53,7 +53,8 @@ def arc_scored(geo, x: float, y: float, th: float, kappa: float, length: float, 
     """The arc (κ, l) from (x, y, θ) passes the rule its plan is scored by: the footprint swept exactly (footprint
     convention; ``hit`` is scratch) or the reference point at ``n_samples`` poses (the paper's rule)."""
     if footprint:
-        return swept_arc_contact(geo, 0, x, y, th, kappa, length, True, local, EXACT_TOLERANCE_M, hit) < 0.0
+        contact = swept_arc_contact(geo, 0, x, y, th, kappa, length, True, local, EXACT_TOLERANCE_M, False, hit)
+        return contact < 0.0
     return arc_valid(geo, 0, x, y, th, kappa, length, n_samples, False, local, corners)
 
 
