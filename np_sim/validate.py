@@ -104,6 +104,9 @@ def validate_plan(scene: Scene, plan: Plan, rule: str = "exact", *, convention: 
     footprint = convention == "footprint"
     arcs = np.asarray(plan.arcs, float).reshape(-1, 2)
     start = np.asarray(plan.start, float)
+    if start.shape != (3,) or not (np.all(np.isfinite(start)) and np.all(np.isfinite(arcs))):
+        raise ValueError(f"validate_plan: expected a finite start [x, y, θ] and finite (κ, l) arcs, got start "
+                         f"{start.tolist()} and {len(arcs)} arcs ({int(np.sum(~np.isfinite(arcs)))} non-finite values)")
     check = _exact_segments if rule == "exact" else _sampled_segments
     found = check(geo, start, arcs, plan, footprint, local, samples_per_arc)
     violation = None if found is None else _violation(scene, *found)

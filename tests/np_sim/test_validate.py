@@ -220,6 +220,8 @@ def test_unknown_rule_and_convention_are_errors_naming_the_choices():
     with pytest.raises(ConfigError, match="convention must be"):
         validate_plan(_scene([]), plan, "exact", convention="wheels")
     assert set(RULES) == {"paper", "footprint_sampled", "exact"}
+    with pytest.raises(ValueError, match="finite start"):
+        validate_plan(_scene([]), Plan(start=np.zeros(3), arcs=np.array([[np.nan, 1.0]])), "paper")
 
 
 @pytest.mark.parametrize("convention", ["reference_point", "footprint"])
