@@ -81,9 +81,13 @@ def _cluster_resources(args) -> tuple[float, float]:
     import ray
 
     nodes = [n["Resources"] for n in ray.nodes() if n.get("Alive")]
-    cpus = args.cpus_per_run or max(n.get("CPU", 1.0) for n in nodes)
-    has_gpu = any(n.get("GPU", 0) >= 1 for n in nodes)
-    gpus = args.gpus_per_run if args.gpus_per_run is not None else (1.0 if has_gpu else 0.0)
+    most_cpus = max(n.get("CPU", 0.0) for n in nodes)
+    most_gpus = max(n.get("GPU", 0.0) for n in nodes)
+    cpus = args.cpus_per_run or most_cpus
+    gpus = args.gpus_per_run if args.gpus_per_run is not None else min(most_gpus, 1.0)
+    if cpus > most_cpus or gpus > most_gpus:  # Ray would wait for such a node forever
+        raise ConfigError(f"--cpus-per-run {cpus:g} / --gpus-per-run {gpus:g}: no node of the Ray cluster has that "
+                          f"many (the largest has {most_cpus:g} CPUs, {most_gpus:g} GPUs)")
     return cpus, gpus
 
 
@@ -113,7 +117,11 @@ def run_sweep(todo: list[RunSpec], args) -> list[dict[str, Any]]:
     from tqdm import tqdm
 
     _start_ray(args.ray_address)
-    cpus, gpus = _cluster_resources(args)
+    try:
+        cpus, gpus = _cluster_resources(args)
+    except ConfigError:
+        ray.shutdown()
+        raise
     task = ray.remote(max_retries=1)(train_run).options(num_cpus=cpus, num_gpus=gpus)
     pending = {task.remote(run, Path(args.log_dir).resolve() / f"{run.name}.log"): run for run in todo}
     print(f"sweep: {len(todo)} run(s) on Ray ({cpus:g} CPU, {gpus:g} GPU per run)", flush=True)
@@ -124,7 +132,11 @@ def run_sweep(todo: list[RunSpec], args) -> list[dict[str, Any]]:
             done, _ = ray.wait(list(pending), num_returns=1, timeout=POLL_S)
             for ref in done:
                 run = pending.pop(ref)
-                result = ray.get(ref)
+                try:
+                    result = ray.get(ref)
+                except ray.exceptions.RayError as exc:  # the worker died (twice: one retry), e.g. killed for memory
+                    result = {"run": run.name, "rc": -1, "log": str(Path(args.log_dir) / f"{run.name}.log"),
+                              "tail": f"{type(exc).__name__}: {exc}"[-2000:]}
                 results.append(result)
                 verdict = "done" if result["rc"] == 0 else f"FAILED (exit {result['rc']}, log {result['log']})"
                 bar.write(f"{run.name}: {verdict}")
@@ -185,6 +197,9 @@ def main(argv=None) -> int:
         return 0
     try:
         results = run_sweep(todo, args)
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("sweep: interrupted; its trainers are stopped. Run the same command again to continue: finished runs "
               "are skipped, interrupted ones resume from their snapshot.", file=sys.stderr)

@@ -124,6 +124,18 @@ def test_paper_plan_recognises_the_shipped_runs():
     assert fixed.ppo.epochs == 240 and fixed.curriculum_pool == shipped["curriculum_pool"] == 1024
 
 
+def test_more_cpus_per_run_than_any_node_has_is_an_error_not_a_hang(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("ray")
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)  # a local Ray sized to this machine
+    plan = _plan(tmp_path, TINY)
+    argv = ["--plan", str(plan), "--seeds", "0", "--out", str(tmp_path / "runs"), "--cpus-per-run", "4096"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.splitlines()[-1].startswith("error: --cpus-per-run 4096 / --gpus-per-run ")  # after Ray's own log
+    assert f"no node of the Ray cluster has that many (the largest has {os.cpu_count()} CPUs" in err
+    assert not (tmp_path / "runs").exists()
+
+
 def _digests(folder: Path) -> dict[str, str]:
     return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir())}
 
@@ -151,12 +163,16 @@ def test_killed_sweep_finishes_only_what_was_unfinished(tmp_path):
                              stderr=subprocess.DEVNULL)
     finished = lambda n: len(_rows(root / n)) == 2 and (root / n / "best.pt").exists()  # noqa: E731
     midway = lambda n: len(_rows(root / n)) == 1 and (root / n / "snapshot.pt").exists()  # noqa: E731
+    ours = {(root / n).resolve() for n in names}
     try:
         _wait(lambda: any(map(finished, names)) and any(map(midway, names)), 600, "one finished and one midway run")
-    finally:
+    finally:  # kill it all at once: the sweep's process group (driver and Ray), then its trainers at once, which
+        trainers = [pid for out, pid in active_trainers().items() if out in ours]  # would die with Ray seconds later
         os.killpg(sweep.pid, signal.SIGKILL)
+        for pid in trainers:
+            os.kill(pid, signal.SIGKILL)
         sweep.wait()
-    _wait(lambda: not set(active_trainers()) & {(root / n).resolve() for n in names}, 60, "the trainers to die")
+    _wait(lambda: not set(active_trainers()) & ours, 60, "the trainers to die")
     done = [n for n in names if finished(n)]
     resumable = {n: _rows(root / n) for n in names if n not in done and (root / n / "snapshot.pt").exists()}
     before = {n: _digests(root / n) for n in done}
