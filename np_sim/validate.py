@@ -147,25 +147,25 @@ def _hermite_poses(plan: Plan) -> np.ndarray:
 def _offender(geo, pose, footprint, local) -> np.ndarray:
     """The hit record (kind, packed index, x, y) of what a rejected pose touches."""
     hit = np.array([swept.KIND_NONE, -1.0, pose[0], pose[1]])
+    swept.body_clear(geo, 0, _body(pose, footprint, local), 4 if footprint else 1, 0.0, hit)
+    hit[2:] = pose[:2]
+    return hit
+
+
+def _body(pose, footprint: bool, local: np.ndarray) -> np.ndarray:
+    """(4, 2) body at ``pose`` as the kernels take it: the rectangle's corners, or the point in row 0."""
     body = np.zeros((4, 2))
     if footprint:
         swept.footprint_corners(pose[0], pose[1], pose[2], local, body)
     else:
         body[0] = pose[:2]
-    swept.body_clear(geo, 0, body, 4 if footprint else 1, 0.0, hit)
-    hit[2:] = pose[:2]
-    return hit
+    return body
 
 
 def _exact_segments(geo, start, arcs, plan, footprint, local, n):
     """(segment, parameter, hit) of the first exact violation, or None."""
     hit = np.array([swept.KIND_NONE, -1.0, 0.0, 0.0])
-    body = np.zeros((4, 2))
-    if footprint:
-        swept.footprint_corners(start[0], start[1], start[2], local, body)
-    else:
-        body[0] = start[:2]
-    if not swept.body_clear(geo, 0, body, 4 if footprint else 1, 0.0, hit):
+    if not swept.body_clear(geo, 0, _body(start, footprint, local), 4 if footprint else 1, 0.0, hit):
         return -1, 0.0, hit
     x, y, th = start
     for i, (kappa, length) in enumerate(arcs):
