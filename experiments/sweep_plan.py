@@ -115,9 +115,21 @@ def load_plan(plan: str) -> tuple[tuple[Configuration, ...], Path]:
     if not isinstance(rows, list) or not rows:
         raise ConfigError(f"{path}: expected a non-empty list under 'configurations'")
     configs = tuple(config_from_dict(Configuration, row, f"{path}: configurations[{i}]") for i, row in enumerate(rows))
-    for config in configs:
+    for i, config in enumerate(configs):
+        where = f"{path}: configurations[{i}]"
+        if not (isinstance(config.name, str) and config.name and isinstance(config.tables, tuple) and config.tables
+                and all(isinstance(t, str) for t in config.tables)):
+            raise ConfigError(f"{where}: expected a non-empty 'name' and a non-empty list of 'tables' (strings)")
         if config.config_file is None and not config.missing:
-            raise ConfigError(f"{path}: configuration {config.name!r}: give config_file, or missing (why not)")
+            raise ConfigError(f"{where}: give 'config_file', or 'missing' (why it is not available yet)")
+        if not isinstance(config.run_name, str) or "{seed}" not in config.run_name:
+            raise ConfigError(f"{where}.run_name: expected a folder name pattern with {{seed}} (and optionally "
+                              f"{{name}}), got {config.run_name!r}")
+    folders = [config.run_name.replace("{name}", config.name) for config in configs]
+    for i, folder in enumerate(folders):
+        if folder in folders[:i]:
+            raise ConfigError(f"{path}: configurations[{i}]: its run folders {folder!r} are those of "
+                              f"configurations[{folders.index(folder)}] too")
     return configs, path.parent
 
 
@@ -197,7 +209,10 @@ def expand(plan, seeds, root: Path, only=None, config_dir: Path = CONFIG_DIR) ->
                 continue
             epochs = None
             if overrides is not None:
-                epochs = resolved_config(config.benchmark, seed, overrides).ppo.epochs
+                try:
+                    epochs = resolved_config(config.benchmark, seed, overrides).ppo.epochs
+                except ConfigError as exc:
+                    raise ConfigError(f"{Path(config_dir) / config.config_file}: {exc}") from None
             run_dir = Path(root) / config.run_name.format(name=config.name, seed=seed)
             runs.append(RunSpec(config, seed, run_dir, overrides, epochs))
     return runs

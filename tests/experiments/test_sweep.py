@@ -86,7 +86,10 @@ def test_dry_run_lists_each_folder_state_and_the_compute_left(tmp_path, capsys):
 def test_each_state_gets_the_train_flags_that_continue_it(tmp_path):
     plan = _plan(tmp_path, TINY)
     run = expand(load_plan(str(plan))[0], [0], tmp_path / "runs", ["main"], tmp_path)[0]
-    flags = lambda: [a for a in train_argv(run, tmp_path / "c.json") if a in ("--resume", "--overwrite")]  # noqa
+
+    def flags():
+        return [a for a in train_argv(run, tmp_path / "c.json") if a in ("--resume", "--overwrite")]
+
     assert flags() == []                                  # not started: a plain new run
     _fake_run(run.run_dir, 0, best=False, snapshot=False)  # killed in its first epoch: an empty metrics.jsonl
     assert run_state(run).kind == "started, no snapshot" and flags() == ["--overwrite"]
@@ -105,6 +108,22 @@ def test_bad_arguments_are_one_error_line(tmp_path, capsys):
         assert main([*argv, "--dry-run"]) == 2
         err = capsys.readouterr().err
         assert err.startswith("error: ") and message in err and "Traceback" not in err
+    (tmp_path / "b.json").write_text(json.dumps({"ppo": {"epochs": 0}}))
+    assert main(["--plan", str(plan), "--dry-run"]) == 2
+    assert capsys.readouterr().err == (f"error: {tmp_path / 'b.json'}: PPOConfig.epochs: expected a positive "
+                                       "integer, got 0\n")
+    (tmp_path / "b.json").write_text("{}")
+    rows = json.loads(plan.read_text())["configurations"]
+    for change, message in (({"tables": []}, "a non-empty list of 'tables'"),
+                            ({"run_name": "a"}, "run_name: expected a folder name pattern with {seed}"),
+                            ({"name": "b", "run_name": "{name}_seed{seed}"},
+                             "[1]: its run folders 'b_seed{seed}' are those of"),
+                            ({"config_file": None}, "give 'config_file', or 'missing'"),
+                            ({"colour": 1}, "unknown key(s) ['colour']")):
+        (tmp_path / "bad.json").write_text(json.dumps({"configurations": [rows[0] | change, *rows[1:]]}))
+        assert main(["--plan", str(tmp_path / "bad.json"), "--dry-run"]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"error: {tmp_path / 'bad.json'}: configurations[") and message in err, err
 
 
 def test_paper_plan_recognises_the_shipped_runs():
