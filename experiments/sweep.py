@@ -31,6 +31,7 @@ from typing import Any
 
 from experiments.sweep_plan import RunSpec, RunState, active_trainers, expand, format_table, holds_run_files, \
     load_plan, metrics_epoch, run_state
+from np_sim.cli import non_negative_float, non_negative_int, positive_int
 from np_sim.errors import ConfigError
 
 RUNNABLE = ("not started", "interrupted", "started, no snapshot")
@@ -153,24 +154,20 @@ def _parser() -> argparse.ArgumentParser:
                         "a plan .json file (see experiments.sweep_plan.load_plan)")
     parser.add_argument("--only", nargs="+", metavar="TABLE", help="only the runs feeding these tables (paper: "
                         "main, staged, representation, connector, curriculum, site)")
-    parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2], help="training seeds (default 0 1 2)")
+    parser.add_argument("--seeds", nargs="+", type=non_negative_int, default=[0, 1, 2], help="training seeds (default 0 1 2)")
     parser.add_argument("--ray-address", help="join this Ray cluster (default: start a local Ray on this machine)")
     parser.add_argument("--out", type=Path, default=Path("checkpoints/runs"), help="run root (default "
                         "checkpoints/runs)")
     parser.add_argument("--log-dir", type=Path, default=Path("results/sweep/logs"),
                         help="training logs, one per run (default results/sweep/logs)")
-    parser.add_argument("--cpus-per-run", type=int, help="CPUs per run (default: a whole node's)")
-    parser.add_argument("--gpus-per-run", type=float, help="GPUs per run (default: 1 when the cluster has GPUs)")
+    parser.add_argument("--cpus-per-run", type=positive_int, help="CPUs per run (default: a whole node's)")
+    parser.add_argument("--gpus-per-run", type=non_negative_float, help="GPUs per run (default: 1 when the cluster has GPUs)")
     parser.add_argument("--dry-run", action="store_true", help="list the runs, their state and the estimated "
                         "compute left; train nothing")
     return parser
 
 
 def _check_args(args) -> None:
-    if args.cpus_per_run is not None and args.cpus_per_run < 1:
-        raise ConfigError(f"--cpus-per-run: expected an integer >= 1, got {args.cpus_per_run}")
-    if args.gpus_per_run is not None and args.gpus_per_run < 0:
-        raise ConfigError(f"--gpus-per-run: expected a number >= 0, got {args.gpus_per_run}")
     if args.out.exists() and not args.out.is_dir():
         raise ConfigError(f"--out: {args.out} is a file, expected a folder of run folders")
 

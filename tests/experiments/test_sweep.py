@@ -102,12 +102,18 @@ def test_bad_arguments_are_one_error_line(tmp_path, capsys):
     for argv, message in ((["--plan", str(plan), "--only", "nope"], "--only: unknown table(s) ['nope']"),
                           (["--plan", "nope"], "--plan: expected one of ['paper'] or a plan .json file"),
                           (["--plan", str(tmp_path / "missing.json")], "missing.json: cannot read"),
-                          (["--plan", str(plan), "--seeds", "-1"], "--seeds: expected non-negative integers"),
-                          (["--plan", str(plan), "--cpus-per-run", "0"], "--cpus-per-run: expected an integer >= 1"),
                           (["--plan", str(plan), "--out", str(plan)], "is a file, expected a folder")):
         assert main([*argv, "--dry-run"]) == 2
         err = capsys.readouterr().err
         assert err.startswith("error: ") and message in err and "Traceback" not in err
+    for argv, message in ((["--seeds", "-1"], "argument --seeds: must be a non-negative integer, got -1"),
+                          (["--seeds", "0.5"], "argument --seeds: must be a non-negative integer, got '0.5'"),
+                          (["--cpus-per-run", "0"], "argument --cpus-per-run: must be a positive integer, got 0"),
+                          (["--gpus-per-run", "-1"], "argument --gpus-per-run: must be")):
+        with pytest.raises(SystemExit) as exit_info:
+            main(["--plan", str(plan), *argv, "--dry-run"])
+        err = capsys.readouterr().err
+        assert exit_info.value.code == 2 and message in err.splitlines()[-1] and "Traceback" not in err
     (tmp_path / "b.json").write_text(json.dumps({"ppo": {"epochs": 0}}))
     assert main(["--plan", str(plan), "--dry-run"]) == 2
     assert capsys.readouterr().err == (f"error: {tmp_path / 'b.json'}: PPOConfig.epochs: expected a positive "
