@@ -7,6 +7,7 @@ import shlex
 from pathlib import Path
 
 import pytest
+from cli_helpers import one_error_line
 
 from experiments import closed_loop, evaluate, planners, track
 from experiments.common import first, run_folder
@@ -21,18 +22,6 @@ EXPERIMENTS = {"evaluate": (evaluate.main, ["--checkpoints", str(CHECKPOINT)]),
                "track": (track.main, []),
                "closed_loop": (closed_loop.main, ["--clips", "--planners", "hybrid_astar"])}
 """Each experiment CLI with the arguments it needs besides the ones under test."""
-
-
-def one_error_line(capsys, main, argv: list[str]) -> str:
-    """Run ``main(argv)``, require exit status 2 and exactly one ``error:`` line on stderr; return that line."""
-    with pytest.raises(SystemExit) as exit_info:
-        main(argv)
-    assert exit_info.value.code == 2
-    err = capsys.readouterr().err
-    lines = [line for line in err.splitlines() if "error:" in line]
-    assert len(lines) == 1, err
-    assert "Traceback" not in err
-    return lines[0]
 
 
 @pytest.mark.parametrize("experiment, argv, expected", [

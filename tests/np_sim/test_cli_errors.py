@@ -6,6 +6,7 @@ import subprocess
 import sys
 
 import pytest
+from cli_helpers import one_error_line
 
 from np_sim import bench, cli, clips, demo, show
 from np_sim.benchmarks import __main__ as benchmarks_cli
@@ -13,18 +14,6 @@ from np_sim.benchmarks import generate as generate_cli
 from np_sim.errors import ConfigError, SceneError
 from np_sim.examples import example_path
 from np_sim.planners import bench as planners_bench
-
-
-def one_error_line(capsys, main, argv: list[str]) -> str:
-    """Run ``main(argv)``, require exit status 2 and exactly one ``error:`` line on stderr; return that line."""
-    with pytest.raises(SystemExit) as exit_info:
-        main(argv)
-    assert exit_info.value.code == 2
-    err = capsys.readouterr().err
-    lines = [line for line in err.splitlines() if "error:" in line]
-    assert len(lines) == 1, err
-    assert "Traceback" not in err
-    return lines[0]
 
 
 @pytest.mark.parametrize("text, value", [("1", 1), ("40", 40), (" 7 ", 7)])
