@@ -373,7 +373,8 @@ def format_table(records: list[dict], names: list[str], split: str = "eval") -> 
             f"{_fmt(float(np.median([r['plan_time_first_ms'] for r in rows])))} |"
             + (f" {PAPER.get(name, '–').replace(' | ', ' / ')} |" if held_out else ""))
     lines += ["", "| Method | Failure reasons | Parked | Final error, footprint successes (m / °) | Cross-track RMS / "
-              "max (m) | Planner calls / failed / refused per run | Sim / wall time per run (s) |", "|---|---|---|---|---|---|---|"]
+              "max (m) | Planner calls / failed / refused per run | Sim / wall time per run (s) |",
+              "|---|---|---|---|---|---|---|"]
     for name in names:
         rows = [r for r in records if r["planner"] == name]
         ok = [r for r in rows if r["footprint_success"]]
@@ -383,7 +384,8 @@ def format_table(records: list[dict], names: list[str], split: str = "eval") -> 
             f"| {LABELS[name]} | {', '.join(f'{k} {v}' for k, v in reasons.most_common()) or '–'} | "
             f"{_mean(r['parked'] for r in rows):.2f} | {_fmt(_mean(r['final_position_error_m'] for r in ok), 3)} / "
             f"{_fmt(_mean(r['final_heading_error_deg'] for r in ok), 1)} | "
-            f"{_fmt(_mean(r['cross_track_rms_m'] for r in ran), 3)} / {_fmt(_mean(r['cross_track_max_m'] for r in ran), 3)} | "
+            f"{_fmt(_mean(r['cross_track_rms_m'] for r in ran), 3)} / "
+            f"{_fmt(_mean(r['cross_track_max_m'] for r in ran), 3)} | "
             f"{_mean(r['plan_calls'] for r in rows):.1f} / {_mean(r['plan_failures'] for r in rows):.1f} / "
             f"{_mean(r['plan_rejected'] for r in rows):.1f} | "
             f"{_mean(r['sim_time_s'] for r in rows):.1f} / {_mean(r['wall_time_s'] for r in rows):.2f} |")

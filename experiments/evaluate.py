@@ -64,7 +64,8 @@ def evaluate(benchmark: str, checkpoints: list[Path], connector: str | None = No
     table = format_table(records, len(checkpoints))
     write_records(folder, records)
     (folder / "table.md").write_text(table + "\n")
-    (folder / "config.json").write_text(json.dumps({"benchmark": benchmark, "checkpoints": [str(p) for p in checkpoints],
+    (folder / "config.json").write_text(json.dumps({"benchmark": benchmark,
+                                                    "checkpoints": [str(p) for p in checkpoints],
                                                     "connector": connector, "samples": samples,
                                                     "action": action, "action_seed": action_seed,
                                                     "episodes": len(episodes),

@@ -154,14 +154,16 @@ def _parser() -> argparse.ArgumentParser:
                         "a plan .json file (see experiments.sweep_plan.load_plan)")
     parser.add_argument("--only", nargs="+", metavar="TABLE", help="only the runs feeding these tables (paper: "
                         "main, staged, representation, connector, curriculum, site)")
-    parser.add_argument("--seeds", nargs="+", type=non_negative_int, default=[0, 1, 2], help="training seeds (default 0 1 2)")
+    parser.add_argument("--seeds", nargs="+", type=non_negative_int, default=[0, 1, 2],
+                        help="training seeds (default 0 1 2)")
     parser.add_argument("--ray-address", help="join this Ray cluster (default: start a local Ray on this machine)")
     parser.add_argument("--out", type=Path, default=Path("checkpoints/runs"), help="run root (default "
                         "checkpoints/runs)")
     parser.add_argument("--log-dir", type=Path, default=Path("results/sweep/logs"),
                         help="training logs, one per run (default results/sweep/logs)")
     parser.add_argument("--cpus-per-run", type=positive_int, help="CPUs per run (default: a whole node's)")
-    parser.add_argument("--gpus-per-run", type=non_negative_float, help="GPUs per run (default: 1 when the cluster has GPUs)")
+    parser.add_argument("--gpus-per-run", type=non_negative_float,
+                        help="GPUs per run (default: 1 when the cluster has GPUs)")
     parser.add_argument("--dry-run", action="store_true", help="list the runs, their state and the estimated "
                         "compute left; train nothing")
     return parser

@@ -120,7 +120,8 @@ def format_table(records: list[dict[str, Any]], controllers) -> str:
             f"{_mean(r['success'] for r in rs):.3f} | "
             f"{_mean(r['success'] for r in fv):.3f} ({len(fv)}) | "
             f"{_mean(r['cross_track_rms_m'] for r in ran):.3f} | {_mean(r['cross_track_max_m'] for r in ran):.3f} | "
-            f"{_mean(r['final_position_error_m'] for r in ok):.3f} / {_mean(r['final_heading_error_deg'] for r in ok):.1f} | "
+            f"{_mean(r['final_position_error_m'] for r in ok):.3f} / "
+            f"{_mean(r['final_heading_error_deg'] for r in ok):.1f} | "
             f"{np.nanmedian([r['realtime_factor'] for r in ran]) if ran else math.nan:.0f}× |")
     n = len({(r['scene'], r['start_id']) for r in records})
     return "\n".join(rows) + f"\n\n{n} episodes; errors over executed runs, final error over executed successes."

@@ -402,7 +402,8 @@ class Clip:
         ``window=1`` is `detections` of `detection_frame` (the raw perception). A filtered outline that is not a
         simple polygon (a turning mover's averaged shape can fold) or would overlap the target footprint of
         ``vehicle`` (default `VehicleSpec()`) is replaced by the object's latest detection, which is neither (the
-        clip's construction), so every frame stays a valid scene with a free target as in the raw clip. Returns ids (n,) in id order and polygons (n, 5, 2) in metres."""
+        clip's construction), so every frame stays a valid scene with a free target as in the raw clip. Returns ids
+        (n,) in id order and polygons (n, 5, 2) in metres."""
         if int(window) < 1:
             raise ConfigError(f"Clip.tracked_detections: window must be >= 1 frame, got {window!r}")
         frames, f = [], self.detection_frame(frame)

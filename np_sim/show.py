@@ -26,7 +26,8 @@ def build_parser() -> argparse.ArgumentParser:
         ),
         epilog="example: python -m np_sim.show np_sim/examples/reverse_bay.json --out bay.png",
     )
-    parser.add_argument("scene", type=existing_file, metavar="SCENE.json", help="scene file to draw (validated on load)")
+    parser.add_argument("scene", type=existing_file, metavar="SCENE.json",
+                        help="scene file to draw (validated on load)")
     parser.add_argument(
         "--out",
         type=Path,
@@ -41,7 +42,8 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="PATH_FILE",
         help="path to overlay: a .npy array or a .json list of [x, y] or [x, y, theta] rows (metres, radians)",
     )
-    parser.add_argument("--dpi", type=positive_int, default=150, help="resolution of the PNG in dots per inch (default 150)")
+    parser.add_argument("--dpi", type=positive_int, default=150,
+                        help="resolution of the PNG in dots per inch (default 150)")
     return parser
 
 

@@ -28,7 +28,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="benchmark to summarise and/or draw (default: all)")
     parser.add_argument("--figure", type=output_folder, default=None, metavar="DIR",
                         help="write factorial_test_{easy,medium,hard}.png and/or topology_test.png into DIR")
-    parser.add_argument("--dpi", type=positive_int, default=110, help="resolution of the PNGs in dots per inch (default 110)")
+    parser.add_argument("--dpi", type=positive_int, default=110,
+                        help="resolution of the PNGs in dots per inch (default 110)")
     return parser
 
 

@@ -75,8 +75,10 @@ def main(argv=None) -> dict:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
     parser.add_argument("--convention", choices=["reference_point", "footprint"], default="reference_point")
-    parser.add_argument("--episodes", type=positive_int, help="seeded subset of the frozen starts for Hybrid A* (default all)")
-    parser.add_argument("--ompl-episodes", type=non_negative_int, default=27, help="seeded subset for the OMPL peer (0 = skip)")
+    parser.add_argument("--episodes", type=positive_int,
+                        help="seeded subset of the frozen starts for Hybrid A* (default all)")
+    parser.add_argument("--ompl-episodes", type=non_negative_int, default=27,
+                        help="seeded subset for the OMPL peer (0 = skip)")
     parser.add_argument("--seed", type=non_negative_int, default=0, help="subset and OMPL seed")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     args = parser.parse_args(argv)

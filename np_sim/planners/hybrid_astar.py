@@ -5,9 +5,9 @@ forward and reverse motion primitives — arcs (κ, l) of paper eq:arc at ``n_cu
 [−κ_max, κ_max] — over an (x, y, θ) lattice, with analytic Reeds–Shepp expansion checked against the scene, the
 heuristic max(Reeds–Shepp length without obstacles, holonomic grid distance with obstacles), and a node and
 time budget. With ``guide`` (M, 2) points of a reference path (the NeuralParker rollout), each node's priority
-adds ``guide_weight`` × min(its distance to that polyline, ``guide_cap_m``) (NP-Guided A*): only the expansion order changes, search
-and feasibility tests do not. ``plan_to_region`` stops at the first node within a radius of the target (the
-region goal of the staged planner, paper Table ``tab:twostage``).
+adds ``guide_weight`` × min(its distance to that polyline, ``guide_cap_m``) (NP-Guided A*): only the expansion order
+changes, search and feasibility tests do not. ``plan_to_region`` stops at the first node within a radius of the
+target (the region goal of the staged planner, paper Table ``tab:twostage``).
 
 Every expanded arc and Reeds–Shepp piece is checked by the rule the plan is scored by (``np_sim.validate``): the
 paper's ``samples_per_arc`` reference points per arc under the reference-point convention, the footprint swept
@@ -107,7 +107,8 @@ class HybridAStarConfig:
             if not (isinstance(value, int) and value >= 1):
                 raise ConfigError(f"HybridAStarConfig.{name}: expected an integer >= 1, got {value!r}")
         if not (isinstance(self.n_curvatures, int) and self.n_curvatures >= 3 and self.n_curvatures % 2 == 1):
-            raise ConfigError(f"HybridAStarConfig.n_curvatures: expected an odd integer >= 3, got {self.n_curvatures!r}")
+            raise ConfigError(f"HybridAStarConfig.n_curvatures: expected an odd integer >= 3, "
+                              f"got {self.n_curvatures!r}")
         if self.step_m <= math.sqrt(2.0) * self.xy_resolution_m:
             raise ConfigError(f"HybridAStarConfig.step_m: must exceed the lattice cell diagonal "
                               f"{math.sqrt(2.0) * self.xy_resolution_m:.3f} m, got {self.step_m}")
@@ -160,7 +161,8 @@ class HybridAStar:
         success when ``start`` is already inside the region.
         """
         if not (math.isfinite(radius_m) and radius_m > 0):
-            raise ValueError(f"HybridAStar.plan_to_region: radius_m must be a finite positive distance, got {radius_m!r}")
+            raise ValueError(f"HybridAStar.plan_to_region: radius_m must be a finite positive distance, "
+                             f"got {radius_m!r}")
         return self._search(scene, start, np.zeros((0, 2)), region_m=float(radius_m))
 
     # ------------------------------------------------------------------------------------------------ internals
@@ -225,7 +227,8 @@ class HybridAStar:
 
         capacity = c.max_expanded * len(self._prims) + 1
         node_pose, node_g = np.empty((capacity, 3)), np.empty(capacity)
-        node_parent, node_arc, node_cell = np.empty(capacity, np.int64), np.empty((capacity, 2)), np.empty(capacity, np.int64)
+        node_parent, node_arc, node_cell = (np.empty(capacity, np.int64), np.empty((capacity, 2)),
+                                            np.empty(capacity, np.int64))
         heap_keys, heap_ids = np.empty(capacity), np.empty(capacity, np.int64)
         cell_stamp, cell_g, closed_stamp = self._cell_arrays(int(np.prod(maps.n_lattice)))
         start_cell = sk.lattice_cell(p[0], p[1], p[2], *maps.lattice, *maps.n_lattice)

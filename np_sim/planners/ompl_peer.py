@@ -109,7 +109,8 @@ class OmplPeer:
         if not setup.haveExactSolutionPath():
             return Plan(start=p, reason="budget", plan_time_s=time.perf_counter() - t0, expanded_nodes=vertices)
         path = setup.getSolutionPath()
-        states = [np.array([s.getX(), s.getY(), s.getYaw()]) for s in (path.getState(i) for i in range(path.getStateCount()))]
+        states = [np.array([s.getX(), s.getY(), s.getYaw()])
+                  for s in (path.getState(i) for i in range(path.getStateCount()))]
         arcs = np.concatenate([shortest_path(a, b_, c.vehicle.kappa_max) for a, b_ in zip(states[:-1], states[1:])])
         arcs = arcs.reshape(-1, 2)
         reason = self._check(scene, p, arcs, goal)

@@ -112,7 +112,8 @@ def heuristic(x: float, y: float, th: float, gx: float, gy: float, gth: float, k
 
 @njit(cache=True, error_model="numpy")
 def rs_shot(geo, x: float, y: float, th: float, gx: float, gy: float, gth: float, kappa_max: float,
-            n_samples: int, footprint: bool, local: np.ndarray, corners: np.ndarray, hit: np.ndarray, rs_out: np.ndarray) -> int:
+            n_samples: int, footprint: bool, local: np.ndarray, corners: np.ndarray, hit: np.ndarray,
+            rs_out: np.ndarray) -> int:
     """Analytic expansion: the shortest Reeds–Shepp path to the goal, written to ``rs_out``; returns its arc count
     when every arc passes ``arc_scored``, −1 otherwise."""
     n = rs_arcs_into(x, y, th, gx, gy, gth, kappa_max, 1e-9, rs_out)
@@ -142,7 +143,8 @@ def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.
     reference points per arc of the paper's rule (``arc_scored``).
     """
     gx, gy, gth = goal[0], goal[1], goal[2]
-    reverse_factor, switch_cost, steer_cost, steer_change_cost, h_weight = costs[0], costs[1], costs[2], costs[3], costs[4]
+    reverse_factor, switch_cost, steer_cost, steer_change_cost, h_weight = (costs[0], costs[1], costs[2], costs[3],
+                                                                            costs[4])
     ox, oy, res = lattice[0], lattice[1], lattice[2]
     nx, ny, nth = n_lattice[0], n_lattice[1], n_lattice[2]
     stamp = state[S_STAMP]
@@ -168,7 +170,8 @@ def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.
         else:
             if dist <= tol_m and abs(wrap_angle(th - gth)) <= tol_rad:
                 return FOUND, i
-            if state[S_EXPANDED] % analytic_every == 1 or rs_length(x, y, th, gx, gy, gth, kappa_max) <= analytic_near_m:
+            if (state[S_EXPANDED] % analytic_every == 1
+                    or rs_length(x, y, th, gx, gy, gth, kappa_max) <= analytic_near_m):
                 n_rs = rs_shot(geo, x, y, th, gx, gy, gth, kappa_max, n_samples, footprint, local, corners, hit,
                                rs_out)
                 if n_rs >= 0:

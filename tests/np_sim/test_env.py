@@ -16,7 +16,8 @@ from np_sim.observation import observation_sections
 from reward_oracle import hermite_score, step_reward, success_reward  # tests/reward_oracle.py
 from np_sim.scene import Scene
 
-OPEN_LOT = {"boundary": [[-20, -25], [20, -25], [20, 25], [-20, 25]], "obstacles": [], "target": [0.0, 0.0, math.pi / 2]}
+OPEN_LOT = {"boundary": [[-20, -25], [20, -25], [20, 25], [-20, 25]], "obstacles": [],
+            "target": [0.0, 0.0, math.pi / 2]}
 
 
 def action(kappa, length):
