@@ -5,6 +5,8 @@ are those of Tianshou's on-policy trainer, whose semantics the PPO here reproduc
 ``steps_per_collect`` transitions at a time from ``num_train_envs`` envs until at least ``steps_per_epoch`` are in;
 after each collect, ``repeats`` passes over the collected data in shuffled minibatches of ``batch_size``.
 Variants are ``dataclasses.replace``; ``from_dict`` rejects unknown keys (``np_sim.errors.ConfigError``).
+``TrainConfig`` bundles them with the env rules of a run; it is written beside its checkpoints and stored inside
+them, so a planner rebuilds the env a policy was trained in from the checkpoint alone (``checkpoint_config``).
 """
 
 from __future__ import annotations
@@ -13,11 +15,18 @@ import dataclasses
 import math
 import types
 import typing
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
-from np_sim.config import config_from_dict
+from np_policy.checkpoint import CheckpointError, check_layout
+from np_sim.config import EnvConfig, config_from_dict
+from np_sim.curriculum import CurriculumSchedule
 from np_sim.errors import ConfigError
+from np_sim.site import SITE_OBSERVATION
+
+BENCHMARKS = ("factorial", "topology", "examples", "site")
+CURRICULUM_REGIONS = ("start_region", "lot")
 
 
 def _matches(hint: Any, value: Any) -> bool:
@@ -224,3 +233,110 @@ class NetworkConfig:
         """Inverse of ``to_dict``; unknown keys and values of the wrong type are a ConfigError."""
         check_types(cls, data)
         return config_from_dict(cls, data)
+
+
+def is_scene_path(benchmark: str) -> bool:
+    """``benchmark`` names a scene JSON file or a folder (of them) rather than a built-in benchmark."""
+    path = Path(benchmark)
+    return path.is_dir() or (path.suffix == ".json" and path.is_file())
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Everything a run depends on; written beside its checkpoints and stored inside them."""
+
+    benchmark: str = "factorial"
+    """Training scenes: 'factorial', 'topology' (their train splits), 'examples' (the hand-made scenes), 'site'
+    (App. C resets from the 1,000 training clips; start with ``benchmark_defaults('site')``), or the path of a
+    scene JSON file or of a folder of them (your own scenes)."""
+    seed: int = 0
+    """Seed of torch, the envs' starts and the minibatch shuffling."""
+    torch_threads: int = 0
+    """torch intra-op threads (0 = all cores)."""
+    curriculum_pool: int = 256
+    """Start poses per scene in the geodesic curriculum pool."""
+    curriculum_region: str = "start_region"
+    """Where the curriculum pool is drawn: 'start_region' (each scene's start region, SPEC §5's reading of the
+    paper's "5 % of the available range") or, beyond that reading, 'lot' (anywhere in the scene's drivable lot
+    that is connected to the target, so the nearest 5 % start next to the bay; a reverse curriculum in the sense
+    of Florensa et al. 2017). Selection episodes keep the start regions either way."""
+    site_pool: int = 8192
+    """Site only: (scene, start) training resets drawn once from the training clips (``np_sim.clips.training_pool``)."""
+    site_recorded_share: float = 0.0
+    """Site only, beyond the paper: this share of the pool are resets from the difficult training clips' own
+    recorded tasks (``np_sim.clips.sample_recorded_reset``: the clip's start, exact or perturbed, and target) instead
+    of App. C's random ones; 0 is the paper's pool."""
+    site_recorded_skip: int = 0
+    """Site only: the first this many difficult training clips (in clip order) are left out of the recorded resets,
+    so they can validate the result as clips the policy never started from."""
+    env: EnvConfig = field(default_factory=EnvConfig)
+    ppo: PPOConfig = field(default_factory=PPOConfig)
+    network: NetworkConfig = field(default_factory=NetworkConfig)
+    curriculum: CurriculumSchedule = field(default_factory=CurriculumSchedule)
+
+    def __post_init__(self) -> None:
+        if self.benchmark not in BENCHMARKS and not is_scene_path(self.benchmark):
+            raise ConfigError(f"TrainConfig.benchmark: expected one of {list(BENCHMARKS)} or the path of a scene "
+                              f"JSON file or folder, got {self.benchmark!r}")
+        if self.curriculum_region not in CURRICULUM_REGIONS:
+            raise ConfigError(f"TrainConfig.curriculum_region: expected one of {CURRICULUM_REGIONS}, got "
+                              f"{self.curriculum_region!r}")
+        if not 0.0 <= self.site_recorded_share <= 1.0:
+            raise ConfigError(f"TrainConfig.site_recorded_share: expected a share in [0, 1], "
+                              f"got {self.site_recorded_share!r}")
+        if self.site_recorded_skip < 0:
+            raise ConfigError(f"TrainConfig.site_recorded_skip: expected >= 0 clips, got {self.site_recorded_skip!r}")
+        if self.site_recorded_share and self.benchmark != "site":
+            raise ConfigError(f"TrainConfig.site_recorded_share: recorded resets exist on the site only, got "
+                              f"benchmark {self.benchmark!r}")
+        if self.benchmark == "site" and self.curriculum.enabled:
+            raise ConfigError("TrainConfig.curriculum.enabled: the site trains from App. C resets (start and "
+                              "detections drawn together), so the geodesic curriculum must be off; start from "
+                              "benchmark_defaults('site')")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain nested dict (JSON-safe)."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "TrainConfig":
+        """Inverse of ``to_dict``; an unknown key or a value of the wrong type (2.5 for an int) anywhere is a
+        ConfigError naming its field path."""
+        check_types(cls, data)
+        return config_from_dict(cls, data)
+
+
+def benchmark_defaults(benchmark: str) -> dict[str, Any]:
+    """The TrainConfig fields a benchmark changes from the paper's Factorial defaults, as a nested dict.
+
+    'site' is the paper's real-vehicle configuration (App. C): target-relative ego, the nearest ten detections as
+    five-vertex polygons and the site boundary (``np_sim.site.SITE_OBSERVATION``), no policy-level LiDAR, the
+    fixed nine-candidate Hermite connector, App. C resets instead of the curriculum.
+    """
+    if benchmark != "site":
+        return {"benchmark": benchmark}
+    return {"benchmark": "site", "env": {"observation": dataclasses.asdict(SITE_OBSERVATION),
+                                         "connector": {"mode": "fixed"}},
+            "curriculum": {"enabled": False}}
+
+
+def checkpoint_config(path: str | Path, payload: dict[str, Any]) -> TrainConfig:
+    """The TrainConfig stored in a loaded checkpoint; CheckpointError naming ``path`` when it is not a valid one."""
+    try:
+        return TrainConfig.from_dict(payload["config"])
+    except ConfigError as exc:
+        raise CheckpointError(f"{path}: its stored config is not a valid TrainConfig: {exc}") from exc
+
+
+def benchmark_layout(benchmark: str) -> dict[str, Any]:
+    """The observation layout (``ObservationConfig`` as a dict) a policy needs to plan ``benchmark``'s scenes: the
+    site's (App. C) for 'site', the paper's default for the Factorial, Topology-Stress and example scenes."""
+    defaults = TrainConfig.from_dict(benchmark_defaults(benchmark) if benchmark == "site" else {})
+    return dataclasses.asdict(defaults.env.observation)
+
+
+def check_benchmark_layout(path: str | Path, config: TrainConfig, benchmark: str) -> None:
+    """CheckpointError naming ``path`` and both layouts when the checkpoint trained under ``config`` reads another
+    observation layout than ``benchmark``'s scenes need (e.g. a site checkpoint for the Factorial scenes)."""
+    check_layout(path, dataclasses.asdict(config.env.observation), benchmark_layout(benchmark),
+                 f"trained on {config.benchmark!r}", f"benchmark {benchmark!r}")

@@ -8,9 +8,12 @@ until at least 60,000 steps are in, after each collect run 10 shuffled passes of
 (Tianshou's on-policy trainer semantics, SPEC §6), then score 32 full-range training-distribution episodes
 with the deterministic policy for checkpoint selection (never a frozen evaluation episode). Every epoch appends
 a line to ``metrics.jsonl`` (statistics, and its wall-clock split into ``collect_s``, ``update_s`` and
-``selection_s``) and redraws ``curves.png``; ``best.pt`` holds the selected policy; ``snapshot.pt``
-(every 20 epochs and at the end) holds everything needed to resume exactly — on CPU a resumed run gives the
-same curve as an uninterrupted one.
+``selection_s``) and redraws ``curves.png``; TensorBoard event files beside it hold the same scalars
+(``--no-tensorboard`` leaves them out); ``best.pt`` holds the selected policy; ``snapshot.pt`` (every 20 epochs,
+and at the last epoch of a run stopped early with ``--epochs``) holds everything needed to resume exactly — on CPU
+a resumed run gives the same curve as an uninterrupted one. A run whose last metrics row is epoch ``ppo.epochs`` is
+finished: its snapshot (optimiser and env state, about three times the size of ``best.pt``) is removed, and
+``--resume`` on it says it is finished.
 """
 
 from __future__ import annotations
@@ -21,7 +24,6 @@ import io
 import json
 import sys
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -29,130 +31,28 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from np_policy.checkpoint import (CheckpointError, check_config, check_layout, config_differences, load_checkpoint,
+from np_policy.checkpoint import (CheckpointError, check_config, config_differences, load_checkpoint,
                                   load_weights, save_checkpoint, write_atomic)
-from np_policy.config import NetworkConfig, PPOConfig, check_types
+from np_policy.config import (BENCHMARKS, PPOConfig, TrainConfig, benchmark_defaults,  # noqa: F401 (re-exported)
+                              checkpoint_config, is_scene_path)
 from np_policy.network import ActorCritic, clip_action
 from np_policy.ppo import RunningMeanStd, compute_targets, make_optimizer, ppo_update, set_learning_rate
-from np_sim.config import EnvConfig, config_from_dict
 from np_sim.curriculum import CurriculumSchedule, CurriculumStartSampler
 from np_sim.env import ParkingVectorEnv
 from np_sim.clips import cached_training_pool, difficult_clips
 from np_sim.errors import ConfigError, NPSimError
 from np_sim.scene import Scene
-from np_sim.site import SITE_OBSERVATION
 from np_sim.starts import UniformStartSampler, fixed_start_sampler
 
-BENCHMARKS = ("factorial", "topology", "examples", "site")
-CURRICULUM_REGIONS = ("start_region", "lot")
 SITE_POOL_FILE = "site_pool.pkl"
 """The site run's reset pool, kept in the run folder so --resume does not draw it again (not committed)."""
 RUN_FILES = ("metrics.jsonl", "snapshot.pt", "best.pt")
 """A folder holding any of these holds a training run: a new run there needs ``overwrite``."""
-REPLACED_FILES = (*RUN_FILES, "curves.png", "config.json")
-"""What ``overwrite`` removes before a new run starts in an existing run folder (the site pool is a cache keyed by
-its settings and stays)."""
-
-
-@dataclass(frozen=True)
-class TrainConfig:
-    """Everything a run depends on; written beside its checkpoints and stored inside them."""
-
-    benchmark: str = "factorial"
-    """Training scenes: 'factorial', 'topology' (their train splits), 'examples' (the hand-made scenes), 'site'
-    (App. C resets from the 1,000 training clips; start with ``benchmark_defaults('site')``), or the path of a
-    scene JSON file or of a folder of them (your own scenes)."""
-    seed: int = 0
-    """Seed of torch, the envs' starts and the minibatch shuffling."""
-    torch_threads: int = 0
-    """torch intra-op threads (0 = all cores)."""
-    curriculum_pool: int = 256
-    """Start poses per scene in the geodesic curriculum pool."""
-    curriculum_region: str = "start_region"
-    """Where the curriculum pool is drawn: 'start_region' (each scene's start region, SPEC §5's reading of the
-    paper's "5 % of the available range") or, beyond that reading, 'lot' (anywhere in the scene's drivable lot
-    that is connected to the target, so the nearest 5 % start next to the bay; a reverse curriculum in the sense
-    of Florensa et al. 2017). Selection episodes keep the start regions either way."""
-    site_pool: int = 8192
-    """Site only: (scene, start) training resets drawn once from the training clips (``np_sim.clips.training_pool``)."""
-    site_recorded_share: float = 0.0
-    """Site only, beyond the paper: this share of the pool are resets from the difficult training clips' own
-    recorded tasks (``np_sim.clips.sample_recorded_reset``: the clip's start, exact or perturbed, and target) instead
-    of App. C's random ones; 0 is the paper's pool."""
-    site_recorded_skip: int = 0
-    """Site only: the first this many difficult training clips (in clip order) are left out of the recorded resets,
-    so they can validate the result as clips the policy never started from."""
-    env: EnvConfig = field(default_factory=EnvConfig)
-    ppo: PPOConfig = field(default_factory=PPOConfig)
-    network: NetworkConfig = field(default_factory=NetworkConfig)
-    curriculum: CurriculumSchedule = field(default_factory=CurriculumSchedule)
-
-    def __post_init__(self) -> None:
-        if self.benchmark not in BENCHMARKS and not _is_scene_path(self.benchmark):
-            raise ConfigError(f"TrainConfig.benchmark: expected one of {list(BENCHMARKS)} or the path of a scene "
-                              f"JSON file or folder, got {self.benchmark!r}")
-        if self.curriculum_region not in CURRICULUM_REGIONS:
-            raise ConfigError(f"TrainConfig.curriculum_region: expected one of {CURRICULUM_REGIONS}, got "
-                              f"{self.curriculum_region!r}")
-        if not 0.0 <= self.site_recorded_share <= 1.0:
-            raise ConfigError(f"TrainConfig.site_recorded_share: expected a share in [0, 1], "
-                              f"got {self.site_recorded_share!r}")
-        if self.site_recorded_skip < 0:
-            raise ConfigError(f"TrainConfig.site_recorded_skip: expected >= 0 clips, got {self.site_recorded_skip!r}")
-        if self.site_recorded_share and self.benchmark != "site":
-            raise ConfigError(f"TrainConfig.site_recorded_share: recorded resets exist on the site only, got "
-                              f"benchmark {self.benchmark!r}")
-        if self.benchmark == "site" and self.curriculum.enabled:
-            raise ConfigError("TrainConfig.curriculum.enabled: the site trains from App. C resets (start and "
-                              "detections drawn together), so the geodesic curriculum must be off; start from "
-                              "benchmark_defaults('site')")
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain nested dict (JSON-safe)."""
-        return dataclasses.asdict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "TrainConfig":
-        """Inverse of ``to_dict``; an unknown key or a value of the wrong type (2.5 for an int) anywhere is a
-        ConfigError naming its field path."""
-        check_types(cls, data)
-        return config_from_dict(cls, data)
-
-
-def benchmark_defaults(benchmark: str) -> dict[str, Any]:
-    """The TrainConfig fields a benchmark changes from the paper's Factorial defaults, as a nested dict.
-
-    'site' is the paper's real-vehicle configuration (App. C): target-relative ego, the nearest ten detections as
-    five-vertex polygons and the site boundary (``np_sim.site.SITE_OBSERVATION``), no policy-level LiDAR, the
-    fixed nine-candidate Hermite connector, App. C resets instead of the curriculum.
-    """
-    if benchmark != "site":
-        return {"benchmark": benchmark}
-    return {"benchmark": "site", "env": {"observation": dataclasses.asdict(SITE_OBSERVATION),
-                                         "connector": {"mode": "fixed"}},
-            "curriculum": {"enabled": False}}
-
-
-def checkpoint_config(path: str | Path, payload: dict[str, Any]) -> TrainConfig:
-    """The TrainConfig stored in a loaded checkpoint; CheckpointError naming ``path`` when it is not a valid one."""
-    try:
-        return TrainConfig.from_dict(payload["config"])
-    except ConfigError as exc:
-        raise CheckpointError(f"{path}: its stored config is not a valid TrainConfig: {exc}") from exc
-
-
-def benchmark_layout(benchmark: str) -> dict[str, Any]:
-    """The observation layout (``ObservationConfig`` as a dict) a policy needs to plan ``benchmark``'s scenes: the
-    site's (App. C) for 'site', the paper's default for the Factorial, Topology-Stress and example scenes."""
-    defaults = TrainConfig.from_dict(benchmark_defaults(benchmark) if benchmark == "site" else {})
-    return dataclasses.asdict(defaults.env.observation)
-
-
-def check_benchmark_layout(path: str | Path, config: TrainConfig, benchmark: str) -> None:
-    """CheckpointError naming ``path`` and both layouts when the checkpoint trained under ``config`` reads another
-    observation layout than ``benchmark``'s scenes need (e.g. a site checkpoint for the Factorial scenes)."""
-    check_layout(path, dataclasses.asdict(config.env.observation), benchmark_layout(benchmark),
-                 f"trained on {config.benchmark!r}", f"benchmark {benchmark!r}")
+EVENT_FILES = "events.out.tfevents.*"
+"""The run's TensorBoard event files (a glob pattern)."""
+REPLACED_FILES = (*RUN_FILES, "curves.png", "config.json", EVENT_FILES)
+"""What ``overwrite`` removes before a new run starts in an existing run folder: names or glob patterns (the site
+pool is a cache keyed by its settings and stays)."""
 
 
 def merge_config(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
@@ -184,14 +84,9 @@ class PairedStartSampler:
             raise CheckpointError(f"PairedStartSampler: a site run has curriculum fraction 1, snapshot has {fraction}")
 
 
-def _is_scene_path(benchmark: str) -> bool:
-    path = Path(benchmark)
-    return path.is_dir() or (path.suffix == ".json" and path.is_file())
-
-
 def training_scenes(benchmark: str):
     """The training split of ``benchmark``, the hand-made example scenes, or the scenes of a JSON file or folder."""
-    if _is_scene_path(benchmark):
+    if is_scene_path(benchmark):
         path = Path(benchmark)
         files = sorted(path.glob("*.json")) if path.is_dir() else [path]
         if not files:
@@ -430,9 +325,10 @@ def write_metrics(path: Path, rows: list[dict[str, Any]]) -> None:
     write_atomic(path, "".join(json.dumps(r) + "\n" for r in rows).encode())
 
 
-def read_metrics(path: Path) -> list[dict[str, Any]]:
-    """The rows of ``metrics.jsonl``. A torn last line (a crash in the middle of a write by an older version) is
-    discarded with a warning on stderr; a bad line elsewhere is a CheckpointError naming the file and line."""
+def read_metrics(path: Path, key: str = "epoch") -> list[dict[str, Any]]:
+    """The rows of ``metrics.jsonl``, each an object with an integer ``key``. A torn last line (a crash in the
+    middle of a write by an older version) is discarded with a warning on stderr; a bad line elsewhere is a
+    CheckpointError naming the file and line."""
     if not path.exists():
         return []
     lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
@@ -442,8 +338,8 @@ def read_metrics(path: Path) -> list[dict[str, Any]]:
             continue
         try:
             row = json.loads(line)
-            if not isinstance(row, dict) or not isinstance(row.get("epoch"), int):
-                raise ValueError("not an object with an integer 'epoch'")
+            if not isinstance(row, dict) or not isinstance(row.get(key), int):
+                raise ValueError(f"not an object with an integer {key!r}")
         except ValueError as exc:
             if any(rest.strip() for rest in lines[number:]):
                 raise CheckpointError(f"{path}: line {number} is not a metrics row ({exc})") from exc
@@ -453,15 +349,16 @@ def read_metrics(path: Path) -> list[dict[str, Any]]:
     return rows
 
 
-def prepare_run_folder(out: Path, resume: bool, overwrite: bool) -> None:
-    """Refuse to start a new run where one exists (ConfigError naming the folder and its run files) unless
-    ``resume`` (continue it) or ``overwrite`` (its run files are removed first); nothing is written or removed
-    before the check."""
+def prepare_run_folder(out: Path, resume: bool, overwrite: bool, run_files: tuple[str, ...] = RUN_FILES,
+                       replaced: tuple[str, ...] = REPLACED_FILES) -> None:
+    """Refuse to start a new run where one exists (ConfigError naming the folder and its ``run_files``) unless
+    ``resume`` (continue it) or ``overwrite`` (the ``replaced`` files are removed first); nothing is written or
+    removed before the check."""
     if out.exists() and not out.is_dir():
         raise ConfigError(f"{out}: expected a run folder, found a file")
     if resume and overwrite:
         raise ConfigError("train: --resume continues the run in the folder, --overwrite replaces it — give one")
-    found = [name for name in RUN_FILES if (out / name).exists()]
+    found = [name for name in run_files if (out / name).exists()]
     if resume:
         if not (out / "snapshot.pt").exists():
             raise ConfigError(f"{out}: nothing to resume, no snapshot.pt in it")
@@ -469,8 +366,9 @@ def prepare_run_folder(out: Path, resume: bool, overwrite: bool) -> None:
         raise ConfigError(f"{out}: already holds a training run ({', '.join(found)}); pass --resume to continue "
                           "it, --overwrite to replace it, or another --out")
     elif found:
-        for name in REPLACED_FILES:
-            (out / name).unlink(missing_ok=True)
+        for pattern in replaced:
+            for path in out.glob(pattern):
+                path.unlink()
     out.mkdir(parents=True, exist_ok=True)
 
 
@@ -531,17 +429,79 @@ def _train_epoch(trainer: Trainer) -> dict[str, Any]:
             "selection_reward": selection, "selection_success": selection_success, **stats}
 
 
+def finished_rows(out: Path, config: TrainConfig) -> list[dict[str, Any]] | None:
+    """The metrics rows of the finished run in ``out`` — its last row is epoch ``ppo.epochs`` and ``best.pt``
+    exists, read from the files alone — or None when the run is not finished. A run trained under another config
+    is a CheckpointError naming its ``config.json`` and every differing field."""
+    rows = read_metrics(out / "metrics.jsonl")
+    if not rows or rows[-1]["epoch"] < config.ppo.epochs or not (out / "best.pt").exists():
+        return None
+    path = out / "config.json"
+    try:
+        stored = TrainConfig.from_dict(json.loads(path.read_text(encoding="utf-8"))).to_dict()
+    except (OSError, ValueError) as exc:  # ValueError covers bad JSON and ConfigError
+        raise ConfigError(f"{path}: not a readable TrainConfig of the finished run ({exc})") from exc
+    check_config(path, config.to_dict(), stored)
+    return rows
+
+
+def log_scalars(writer: Any, row: dict[str, Any]) -> None:
+    """Every field of a metrics row except ``epoch`` as a TensorBoard scalar of the same name at step ``epoch``."""
+    for key, value in row.items():
+        if key != "epoch":
+            writer.add_scalar(key, value, global_step=row["epoch"])
+    writer.flush()
+
+
+def event_writer(out: Path, rows: list[dict[str, Any]], epoch: int) -> Any:
+    """A TensorBoard ``SummaryWriter`` on ``out`` continuing the run after ``epoch``: scalars that a killed run
+    wrote after its snapshot are purged (``purge_step``), so no step shows twice; a folder without event files
+    (a run started with ``--no-tensorboard``) first gets the kept ``rows``."""
+    from torch.utils.tensorboard import SummaryWriter  # imported here: only runs that log load tensorboard
+
+    if any(out.glob(EVENT_FILES)):
+        return SummaryWriter(str(out), purge_step=epoch + 1)
+    writer = SummaryWriter(str(out))
+    for row in rows:
+        log_scalars(writer, row)
+    return writer
+
+
+def _write_epoch(trainer: Trainer, out: Path, rows: list[dict[str, Any]], writer: Any, last: int) -> None:
+    """The epoch's files, in an order a kill cannot make lie: ``best.pt`` and ``curves.png`` first, then the
+    metrics row (a row means its epoch is written; a last row at ``ppo.epochs`` means the run is finished) and its
+    TensorBoard scalars, then the snapshot: written every ``snapshot_every_epochs`` and at ``last``, removed once
+    the run is finished."""
+    row, ppo = rows[-1], trainer.config.ppo
+    if row["selection_reward"] > trainer.best_reward:
+        trainer.best_reward = row["selection_reward"]
+        save_checkpoint(out / "best.pt", trainer.checkpoint_payload(row["selection_reward"]))
+    _plot_curves(rows, out / "curves.png", ppo.selection_episodes)
+    write_metrics(out / "metrics.jsonl", rows)
+    if writer is not None:
+        log_scalars(writer, row)
+    if trainer.epoch == ppo.epochs:
+        (out / "snapshot.pt").unlink(missing_ok=True)
+    elif trainer.epoch % ppo.snapshot_every_epochs == 0 or trainer.epoch == last:
+        save_checkpoint(out / "snapshot.pt", trainer.state())
+
+
 def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resume: bool = False,
-          progress: bool = True, init: str | Path | None = None, overwrite: bool = False) -> list[dict[str, Any]]:
+          progress: bool = True, init: str | Path | None = None, overwrite: bool = False,
+          tensorboard: bool = True) -> list[dict[str, Any]]:
     """Run (or resume) training up to ``epochs`` (default: the config's); returns the metrics rows. ``init``
     warm-starts a new run from another checkpoint's weights (``Trainer.initialize_from``). A folder that already
-    holds a run is refused unless ``resume`` or ``overwrite`` (`prepare_run_folder`); every file is written
-    atomically."""
+    holds a run is refused unless ``resume`` or ``overwrite`` (`prepare_run_folder`); resuming a finished run
+    (`finished_rows`) trains nothing and returns its rows. Every file is written atomically; ``tensorboard``
+    also logs each row to TensorBoard event files in ``out`` (`event_writer`)."""
     if init is not None and resume:
         raise ConfigError("train: --init starts a new run from another checkpoint; --resume continues this run's "
                           "snapshot — give one of them")
     out = Path(out)
     last = check_epochs(epochs, config.ppo)
+    if resume and not overwrite and (done := finished_rows(out, config)) is not None:
+        (out / "snapshot.pt").unlink(missing_ok=True)  # left by a kill between the last row and its removal
+        return done
     prepare_run_folder(out, resume, overwrite)
     trainer = Trainer(config, out)
     metrics_path = out / "metrics.jsonl"
@@ -557,18 +517,17 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
     ppo = config.ppo
     bar = tqdm(range(trainer.epoch, last), desc="epochs", unit="epoch", disable=not progress,
                initial=trainer.epoch, total=last)
-    for _ in bar:
-        row = _train_epoch(trainer)
-        rows.append(row)
-        write_metrics(metrics_path, rows)
-        if row["selection_reward"] > trainer.best_reward:
-            trainer.best_reward = row["selection_reward"]
-            save_checkpoint(out / "best.pt", trainer.checkpoint_payload(row["selection_reward"]))
-        if trainer.epoch % ppo.snapshot_every_epochs == 0 or trainer.epoch == last:
-            save_checkpoint(out / "snapshot.pt", trainer.state())
-        _plot_curves(rows, out / "curves.png", ppo.selection_episodes)
-        bar.set_postfix(steps_s=f"{row['steps_per_s']:,.0f}", ret=f"{row['train_return']:.0f}",
-                        succ=f"{row['train_success']:.2f}", cur=f"{row['curriculum_fraction']:.2f}")
+    writer = event_writer(out, rows, trainer.epoch) if tensorboard else None
+    try:
+        for _ in bar:
+            row = _train_epoch(trainer)
+            rows.append(row)
+            _write_epoch(trainer, out, rows, writer, last)
+            bar.set_postfix(steps_s=f"{row['steps_per_s']:,.0f}", ret=f"{row['train_return']:.0f}",
+                            succ=f"{row['train_success']:.2f}", cur=f"{row['curriculum_fraction']:.2f}")
+    finally:
+        if writer is not None:
+            writer.close()
     return rows
 
 
@@ -609,16 +568,25 @@ def main(argv=None) -> list[dict[str, Any]]:
                         "curves and checkpoints are deleted)")
     parser.add_argument("--init", type=Path, help="start a new run from this checkpoint's weights (same observation "
                         "and network config; e.g. the footprint variant from the reference-point site checkpoint)")
+    parser.add_argument("--tensorboard", action=argparse.BooleanOptionalAction, default=True,
+                        help="write the metrics as TensorBoard event files beside metrics.jsonl (view them with "
+                        "`tensorboard --logdir <out>`)")
     args = parser.parse_args(argv)
     data = merge_config(benchmark_defaults(args.benchmark), _read_overrides(args.config))
     data.update(benchmark=args.benchmark, seed=args.seed)
     try:
         config = TrainConfig.from_dict(data)
         out = args.out or Path("results/train") / f"{config.benchmark}_seed{config.seed}"
-        rows = train(config, out, epochs=args.epochs, resume=args.resume, init=args.init, overwrite=args.overwrite)
+        rows = train(config, out, epochs=args.epochs, resume=args.resume, init=args.init, overwrite=args.overwrite,
+                     tensorboard=args.tensorboard)
     except NPSimError as exc:  # the project's own errors (checkpoint, config, scene) are the user's to fix
         raise _fail(str(exc)) from None
-    print(f"{len(rows)} epochs in {out}: metrics.jsonl, curves.png, best.pt, snapshot.pt")
+    total = config.ppo.epochs
+    if rows and rows[-1]["epoch"] == total:
+        print(f"{out}: finished at epoch {total} of {total} (metrics.jsonl, curves.png, best.pt; no snapshot)")
+    else:
+        print(f"{out}: stopped at epoch {rows[-1]['epoch'] if rows else 0} of {total}; continue it with --resume "
+              "(snapshot.pt)")
     return rows
 
 
