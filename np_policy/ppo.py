@@ -99,7 +99,7 @@ def compute_targets(rewards: np.ndarray, values: np.ndarray, next_values: np.nda
 def clipped_ppo_loss(new_log_prob: torch.Tensor, old_log_prob: torch.Tensor, advantages: torch.Tensor,
                      values: torch.Tensor, returns: torch.Tensor, entropy: torch.Tensor, clip_coef: float,
                      old_values: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """(policy loss, value loss, entropy mean) of one minibatch.
+    """(policy loss, value loss, entropy mean) of one minibatch: the clipped surrogate of paper eq:ppo.
 
     ρ = exp(log π_new − log π_old); L_clip = −mean(min(ρ·A, clip(ρ, 1−ε, 1+ε)·A));
     L_V = mean((R − V)²), or with ``old_values`` the clipped form mean(max((R − V)², (R − V_clip)²)),
