@@ -1,0 +1,106 @@
+"""The adapted HOPE actor and critic (paper §IV-B, App. ``app:hope-adaptation``; HOPE's ``MultiObsEmbedding``).
+
+Each active modality (LiDAR, target, and the action mask when it is used) is embedded in 128-D by
+``Linear → tanh → Linear``; the embeddings form a sequence of tokens fused by one pre-norm attention block
+(eight 32-D heads, a 128-unit tanh feed-forward sublayer, residual connections); the flattened tokens pass a
+128-unit tanh hidden layer to the output. The actor's output is squashed by tanh and is the mean of a diagonal
+Gaussian over the normalised 2-D action with a state-independent learned log standard deviation (initially 0);
+the critic's output is the value. Weights are orthogonal with gain 1 and biases zero, as in HOPE.
+
+HOPE's unused ``view_embed`` parameter (created as zeros and never added) is left out.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from torch import nn
+
+EMBED = 128
+"""Width of each modality's embedding (paper App. ``app:hope-adaptation``)."""
+HEADS = 8
+HEAD_DIM = 32
+FEEDFORWARD = 128
+HIDDEN = 128
+ACTION_DIM = 2
+
+
+@dataclass(frozen=True)
+class Modalities:
+    """Input branches of a network: name and feature count of each flat vector input, in token order."""
+
+    sizes: tuple[tuple[str, int], ...]
+    """(observation key, features) pairs, e.g. (("lidar", 120), ("target", 5), ("action_mask", 42))."""
+
+
+def _embedding(features: int) -> nn.Sequential:
+    return nn.Sequential(nn.Linear(features, EMBED), nn.Tanh(), nn.Linear(EMBED, EMBED))
+
+
+class AttentionBlock(nn.Module):
+    """One pre-norm transformer block: ``x + MHA(LN(x))`` then ``x + FF(LN(x))`` with a tanh feed-forward."""
+
+    def __init__(self):
+        super().__init__()
+        inner = HEADS * HEAD_DIM
+        self.norm1 = nn.LayerNorm(EMBED)
+        self.qkv = nn.Linear(EMBED, 3 * inner, bias=False)
+        self.out = nn.Linear(inner, EMBED)
+        self.norm2 = nn.LayerNorm(EMBED)
+        self.ff = nn.Sequential(nn.Linear(EMBED, FEEDFORWARD), nn.Tanh(), nn.Linear(FEEDFORWARD, EMBED))
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        """``x``: (batch, tokens, 128) → same shape."""
+        b, n, _ = x.shape
+        q, k, v = self.qkv(self.norm1(x)).view(b, n, 3, HEADS, HEAD_DIM).permute(2, 0, 3, 1, 4)
+        attn = torch.softmax(q @ k.transpose(-1, -2) * HEAD_DIM ** -0.5, dim=-1)
+        x = x + self.out((attn @ v).transpose(1, 2).reshape(b, n, HEADS * HEAD_DIM))
+        return x + self.ff(self.norm2(x))
+
+
+class FusionNetwork(nn.Module):
+    """Modality embeddings → attention block → flattened tokens → 128 tanh → output (HOPE's fused backbone)."""
+
+    def __init__(self, modalities: Modalities, output: int, tanh_output: bool):
+        super().__init__()
+        self.keys = tuple(key for key, _ in modalities.sizes)
+        self.embed = nn.ModuleDict({key: _embedding(n) for key, n in modalities.sizes})
+        self.block = AttentionBlock()
+        self.head = nn.Sequential(nn.Linear(len(self.keys) * EMBED, HIDDEN), nn.Tanh(), nn.Linear(HIDDEN, output))
+        self.tanh_output = tanh_output
+        for module in self.modules():
+            if isinstance(module, nn.Linear):
+                nn.init.orthogonal_(module.weight, gain=1.0)
+                if module.bias is not None:
+                    nn.init.zeros_(module.bias)
+
+    def forward(self, obs: dict[str, torch.Tensor]) -> torch.Tensor:
+        """``obs``: each key of the modalities as (batch, features) → (batch, output)."""
+        tokens = torch.stack([self.embed[key](obs[key]) for key in self.keys], dim=1)
+        out = self.head(self.block(tokens).flatten(1))
+        return torch.tanh(out) if self.tanh_output else out
+
+
+class HopeActorCritic(nn.Module):
+    """Actor (Gaussian mean, tanh-squashed), learned log standard deviation and critic (value)."""
+
+    def __init__(self, modalities: Modalities):
+        super().__init__()
+        self.modalities = modalities
+        self.actor = FusionNetwork(modalities, ACTION_DIM, tanh_output=True)
+        self.log_std = nn.Parameter(torch.zeros(ACTION_DIM))
+        self.critic = FusionNetwork(modalities, 1, tanh_output=False)
+
+    def distribution(self, obs: dict[str, torch.Tensor]) -> torch.distributions.Normal:
+        """The policy ``N(clamp(μ(o), −1, 1), exp(log σ)²)`` over the normalised action (HOPE's gaussian head)."""
+        mean = self.actor(obs).clamp(-1.0, 1.0)
+        return torch.distributions.Normal(mean, self.log_std.exp().expand_as(mean))
+
+    def value(self, obs: dict[str, torch.Tensor]) -> torch.Tensor:
+        """V(o), shape (batch,)."""
+        return self.critic(obs).squeeze(-1)
+
+    def actor_parameters(self) -> list[nn.Parameter]:
+        """What the actor optimiser trains: the actor network and the log standard deviation."""
+        return [*self.actor.parameters(), self.log_std]

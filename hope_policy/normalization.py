@@ -1,0 +1,98 @@
+"""Running mean-and-standard-deviation normalisation of the adapted HOPE's observation branches (paper App.
+``app:hope-adaptation``, HOPE's ``StateNorm``).
+
+Only the LiDAR, target and optional vertex branches are normalised; the action mask and the BEV image pass through
+unchanged. Each normalised feature keeps its own running mean and population standard deviation over every
+observation it has been updated with, and ``x`` becomes ``(x - mean) / (std + 1e-8)``. As in HOPE, the statistics
+are updated with each observation an env step returns (and with the very first observation of the run) and are
+stored in the checkpoint, so evaluation normalises exactly as training last did.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+NORMALISED_KEYS = ("lidar", "target", "vertices")
+"""Observation branches with running statistics (paper App. ``app:hope-adaptation``)."""
+EPS = 1e-8
+"""Added to the standard deviation before dividing (HOPE's ``state_norm``)."""
+
+
+class RunningMeanStd:
+    """Per-feature running mean and population variance of a stream of arrays of one shape.
+
+    Batches are merged with Chan et al.'s parallel update, so the statistics after any split of the stream into
+    batches equal ``np.mean`` and ``np.var`` over the whole stream (up to rounding).
+    """
+
+    def __init__(self, shape: tuple[int, ...]):
+        self.shape = tuple(shape)
+        self.count = 0
+        self.mean = np.zeros(self.shape, np.float64)
+        self.m2 = np.zeros(self.shape, np.float64)
+
+    @property
+    def std(self) -> np.ndarray:
+        """Population standard deviation ``sqrt(M2 / n)`` (zeros before any update)."""
+        return np.sqrt(self.m2 / self.count) if self.count else np.zeros(self.shape)
+
+    def update(self, batch: np.ndarray) -> None:
+        """Merge ``batch`` (``(n, *shape)``) into the statistics."""
+        batch = np.asarray(batch, np.float64)
+        if batch.shape[1:] != self.shape:
+            raise ValueError(f"RunningMeanStd.update: expected a batch of shape (n, {self.shape}), got {batch.shape}")
+        n = batch.shape[0]
+        if n == 0:
+            return
+        mean_b = batch.mean(axis=0)
+        m2_b = ((batch - mean_b) ** 2).sum(axis=0)
+        total = self.count + n
+        delta = mean_b - self.mean
+        self.mean = self.mean + delta * (n / total)
+        self.m2 = self.m2 + m2_b + delta ** 2 * (self.count * n / total)
+        self.count = total
+
+    def normalise(self, x: np.ndarray) -> np.ndarray:
+        """``(x - mean) / (std + 1e-8)`` as float32."""
+        return ((np.asarray(x, np.float64) - self.mean) / (self.std + EPS)).astype(np.float32)
+
+    def state_dict(self) -> dict[str, Any]:
+        """Count, mean and M2 (plain data and arrays)."""
+        return {"count": self.count, "mean": self.mean.copy(), "m2": self.m2.copy()}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Inverse of ``state_dict``; ValueError when the stored shape is not this one."""
+        mean, m2 = np.asarray(state["mean"], np.float64), np.asarray(state["m2"], np.float64)
+        if mean.shape != self.shape or m2.shape != self.shape:
+            raise ValueError(f"RunningMeanStd: stored statistics have shape {mean.shape}, expected {self.shape}")
+        self.count, self.mean, self.m2 = int(state["count"]), mean.copy(), m2.copy()
+
+
+class ObservationNormaliser:
+    """One `RunningMeanStd` per normalised branch present in the observation (`NORMALISED_KEYS`)."""
+
+    def __init__(self, shapes: dict[str, tuple[int, ...]]):
+        self.stats = {key: RunningMeanStd(shape) for key, shape in shapes.items() if key in NORMALISED_KEYS}
+
+    def update(self, obs: dict[str, np.ndarray]) -> None:
+        """Add a batch of observations (each branch ``(n, *shape)``) to the statistics."""
+        for key, stats in self.stats.items():
+            stats.update(obs[key])
+
+    def __call__(self, obs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """A new dict: normalised branches replaced, the others (mask, image) passed through as float32."""
+        return {key: self.stats[key].normalise(value) if key in self.stats else np.asarray(value, np.float32)
+                for key, value in obs.items()}
+
+    def state_dict(self) -> dict[str, Any]:
+        """The statistics of every branch, by branch name."""
+        return {key: stats.state_dict() for key, stats in self.stats.items()}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Inverse of ``state_dict``; ValueError naming the branches when they differ from this normaliser's."""
+        if set(state) != set(self.stats):
+            raise ValueError(f"ObservationNormaliser: stored branches {sorted(state)}, expected {sorted(self.stats)}")
+        for key, stats in self.stats.items():
+            stats.load_state_dict(state[key])
