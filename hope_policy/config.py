@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from np_policy.config import check_types
+from np_sim.bev import BevConfig
 from np_sim.config import ConnectorConfig, ObservationConfig, config_from_dict
 from np_sim.curriculum import CurriculumSchedule
 from np_sim.errors import ConfigError
@@ -108,7 +109,11 @@ class HopeEnvConfig:
     rs_length_ratio: float = 1.6
     """Shortest-first search stops at a candidate longer than this × the shortest (from the third on)."""
     added_input: AddedInput = "none"
-    """Added scene input of the representation variants: 'none', 'bev' (needs np_sim.bev) or 'vertices'."""
+    """Added scene input of the representation variants: 'none', 'bev' or 'vertices'."""
+    bev: BevConfig = field(default_factory=BevConfig)
+    """The BEV raster of the 'bev' input (``np_sim.bev``: ego-aligned 64 × 64 RGB, HOPE's scale and colours)."""
+    bev_tail: bool = True
+    """Draw the trajectory tail (up to ``bev.tail_poses`` poses) in the BEV, as the HOPE-style control does."""
     observation: ObservationConfig = field(default_factory=ObservationConfig)
     """LiDAR beams and range, and the slot capacities of the 'vertices' input (its other fields are unused)."""
     connector: ConnectorConfig = field(default_factory=lambda: ConnectorConfig(mode="fixed"))

@@ -58,6 +58,7 @@ from hope_policy.config import HopeEnvConfig
 from hope_policy.reward import box_iou, reward_parameters
 from hope_policy.spaces import N_ANCHORS, TARGET_SIZE, action_space, action_to_arc, observation_space
 from hope_policy.takeover import MAX_CHUNKS
+from np_sim.bev import render_bev_batch
 from np_sim.config import EnvConfig
 from np_sim.env_core import BatchCore
 from np_sim.errors import ConfigError
@@ -131,6 +132,7 @@ class HopeCore:
         self.mask = np.ones((n, N_ANCHORS), np.float32)
         self.starts = np.zeros((n, 3))
         self.arc_log = np.zeros((n, config.max_steps, 2))
+        self.pose_log = np.zeros((n, config.max_steps + 1, 3))
         self.vertices = None
         if config.added_input == "vertices":
             ob = dataclasses.replace(config.observation, use_obstacles=True, use_boundary=True)
@@ -150,6 +152,7 @@ class HopeCore:
         local = self.base.local
         self.S[env_ids, K.S_BEST_IOU] = [box_iou(*p, t, local) for p, t in zip(poses, targets)]
         self.starts[env_ids] = poses
+        self.pose_log[env_ids, 0] = poses
         K.observe_batch(self.geo, self.targets, self.S, self.P, env_ids, self.base.b_ranges, self.base.off_c,
                         self.base.off_s, self.mask_tables, self.lidar, self.target, self.mask)
 
@@ -167,8 +170,9 @@ class HopeCore:
                      b.local, self.queue, b.b_ranges, b.off_c, b.off_s, self.mask_tables, b.offsets, b.headings,
                      b.scales0, b.scales1, b.basis, b.dbasis, b.h_pts, b.h_kbar_max, b.h_dk, b.h_len, b.h_cost,
                      self.lidar, self.target, self.mask, self.R)
-        rows = np.arange(self.num_envs)
-        self.arc_log[rows, self.S[:, K.S_STEPS].astype(np.int64) - 1] = self.R[:, K.R_KAPPA:K.R_LENGTH + 1]
+        rows, steps = np.arange(self.num_envs), self.S[:, K.S_STEPS].astype(np.int64)
+        self.arc_log[rows, steps - 1] = self.R[:, K.R_KAPPA:K.R_LENGTH + 1]
+        self.pose_log[rows, steps] = self.S[:, K.S_X:K.S_TH + 1]
 
     def observation(self, rows=slice(None)) -> dict[str, np.ndarray]:
         """Copies of the observation arrays (rows ``rows``) as the observation-space dict."""
@@ -176,8 +180,25 @@ class HopeCore:
         if self.config.action_mask:
             obs["action_mask"] = self.mask[rows].copy()
         if self.vertices is not None:
-            obs["vertices"] = self.vertices[self.S[rows, K.S_SCENE].astype(np.int64)]
+            obs["vertices"] = self.vertices[self.S[rows, K.S_SCENE].astype(np.int64)].copy()
+        if self.config.added_input == "bev":
+            obs["bev"] = self.bev(rows)
         return obs
+
+    def bev(self, rows=slice(None)) -> np.ndarray:
+        """BEV rasters (``np_sim.bev``) of the envs ``rows`` at their current poses, with the trajectory tail: up to
+        ``bev.tail_poses − 1`` earlier step-end poses of the episode, oldest first (none when ``bev_tail`` is off)."""
+        ids = np.arange(self.num_envs)[rows]
+        one = np.ndim(ids) == 0
+        ids = np.atleast_1d(ids)
+        steps = self.S[ids, K.S_STEPS].astype(np.int64)
+        span = self.config.bev.tail_poses - 1 if self.config.bev_tail else 0
+        n_tail = np.minimum(steps, span)
+        window = np.arange(max(span, 1))[None, :] + (steps - n_tail)[:, None]
+        tails = self.pose_log[ids[:, None], np.minimum(window, self.config.max_steps)]
+        images = render_bev_batch(self.base.arrays, self.S[ids, K.S_SCENE].astype(np.int64),
+                                  self.S[ids, K.S_X:K.S_TH + 1], tails, n_tail, self.config.bev, self.config.vehicle)
+        return images[0] if one else images
 
     def executed_actions(self) -> np.ndarray:
         """(N, 2) normalised actions of the arcs executed by the last step (the policy's or a takeover chunk's)."""

@@ -11,7 +11,8 @@ Observation: a ``Dict`` with
 | ``action_mask``| (42,)             | HOPE's anchor mask in [0, 1]; present only when ``config.action_mask``       |
 | ``vertices``  | (S,)               | only for ``added_input="vertices"``: target-frame obstacle slots then        |
 |               |                    | boundary slots of ``np_sim.observation`` (sentinel −1e4); see `vertex_shapes` |
-| ``bev``       | np_sim.bev's shape | only for ``added_input="bev"`` (needs ``np_sim.bev``)                        |
+| ``bev``       | (3, 64, 64) uint8  | only for ``added_input="bev"``: ``np_sim.bev`` ego-aligned RGB raster with    |
+|               |                    | the trajectory tail (``config.bev_tail``)                                    |
 
 Action: ``Box(-1, 1, (2,), float32)`` mapped linearly to steering angle δ = a_0 · δ_max (rad, positive = left)
 and speed v = a_1 · v_max (m/s, sign = gear), held for ``rollout_s`` (`action_to_arc`).
@@ -19,30 +20,16 @@ and speed v = a_1 · v_max (m/s, sign = gear), held for ``rollout_s`` (`action_t
 
 from __future__ import annotations
 
-import importlib
-
 import numpy as np
 from gymnasium import spaces
 
 from hope_policy.config import HopeEnvConfig
-from np_sim.errors import ConfigError
 from np_sim.lidar import footprint_ranges
 
 N_ANCHORS = 42
 """HOPE's discrete anchors: 21 steering angles × forward/reverse (``configs.py`` ``discrete_actions``)."""
 TARGET_SIZE = 5
 """Length of HOPE's target representation."""
-
-
-def bev_module():
-    """``np_sim.bev`` (the BEV raster of the 'bev' added input), or a ConfigError saying it is needed."""
-    try:
-        return importlib.import_module("np_sim.bev")
-    except ModuleNotFoundError as err:
-        if err.name not in ("np_sim.bev",):
-            raise
-        raise ConfigError("HopeEnvConfig.added_input: 'bev' needs the BEV raster module np_sim.bev, which is not "
-                          "installed in this checkout; use 'none' or 'vertices'") from None
 
 
 def vertex_shapes(config: HopeEnvConfig) -> dict[str, tuple[int, int]]:
@@ -71,7 +58,8 @@ def observation_space(config: HopeEnvConfig) -> spaces.Dict:
     if config.added_input == "vertices":
         parts["vertices"] = spaces.Box(-np.inf, np.inf, (_vertex_size(config),), np.float32)
     elif config.added_input == "bev":
-        parts["bev"] = bev_module().observation_space()
+        size = config.bev.size_px
+        parts["bev"] = spaces.Box(0, 255, (3, size, size), np.uint8)
     return spaces.Dict(parts)
 
 

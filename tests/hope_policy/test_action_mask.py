@@ -93,12 +93,13 @@ def test_compiled_mask_equals_hopes_rule_on_random_scans():
 
 def test_mask_against_brute_force_shapely_sweeps():
     wall = [[4.0, -3.0], [5.0, -3.0], [5.0, 3.0], [4.0, 3.0]]  # 0.24 m ahead of the front bumper
-    scene = Scene.from_dict({"boundary": [[-30, -30], [30, -30], [30, 30], [-30, 30]], "obstacles": [wall],
+    scene = Scene.from_dict({"boundary": [[-30, -30], [30, -30], [30, 30], [-30, 30]], "obstacles": [{"polygon": wall}],
                              "target": [-15.0, 0.0, math.pi / 2]})
     d_star = swept_distances(CONFIG)
     b = footprint_ranges(CONFIG.vehicle, 120)
     out = np.empty(42, np.int64)
-    free_poses(cast_rays(scene, (0.0, 0.0, 0.0)), b, 10.0, d_star, sector_maxima(d_star, MASK_SECTOR), 10, out)
+    free_poses(cast_rays(scene, (0.0, 0.0, 0.0)), b, 10.0, d_star, sector_maxima(d_star, MASK_SECTOR), MASK_SECTOR, 10,
+               out)
     obstacle = Polygon(wall)
     exact = []
     for steer, speed in anchor_actions() * [0.75, 1.0]:

@@ -83,36 +83,47 @@ def hope_shortest_first(scene, start, ratio=1.6):
     return None
 
 
+def merged(arcs):
+    """Consecutive pieces of equal curvature and gear merged, empty pieces dropped: a path's word."""
+    out = []
+    for kappa, length in arcs:
+        if abs(length) < 1e-9:
+            continue
+        if out and np.isclose(out[-1][0], kappa) and out[-1][1] * length > 0:
+            out[-1][1] += length
+        else:
+            out.append([kappa, length])
+    return np.array(out)
+
+
 def test_search_matches_hopes_shortest_first_rule_with_shapely_checks():
     rng = np.random.default_rng(4)
-    accepted_longer = 0
-    for trial in range(25):
-        cx, cy = rng.uniform(-5, 5, 2)
-        block = [[cx - 1, cy - 1], [cx + 1, cy - 1], [cx + 1, cy + 1], [cx - 1, cy + 1]]
-        if Polygon(block).distance(TARGET_BOX) < 0.3:
+    outcomes = {"shortest": 0, "longer": 0, "none": 0}
+    for _ in range(40):
+        start = np.array([*rng.uniform(-9, 9, 2), rng.uniform(-math.pi, math.pi)])
+        cx, cy = 0.5 * start[:2] + rng.uniform(-1.5, 1.5, 2)
+        block = Polygon([[cx - 1.2, cy - 1.2], [cx + 1.2, cy - 1.2], [cx + 1.2, cy + 1.2], [cx - 1.2, cy + 1.2]])
+        if block.distance(TARGET_BOX) < 0.3 or block.distance(Point(start[:2])) < 0.3:
             continue
-        scene = Scene.from_dict({"boundary": BOUNDARY, "obstacles": [block], "target": [0.0, 0.0, math.pi / 2]})
-        start = np.array([*rng.uniform(-7, 7, 2), rng.uniform(-math.pi, math.pi)])
-        if Polygon(block).distance(Point(start[:2])) < 0.5:
-            continue
+        scene = Scene.from_dict({"boundary": BOUNDARY, "obstacles": [{"polygon": list(block.exterior.coords)[:4]}],
+                                 "target": [0.0, 0.0, math.pi / 2]})
         queue = np.empty((MAX_CHUNKS, 2))
-        geo = packed_scene(scene).geometry
-        m = find_takeover(geo, 0, *start, np.asarray(scene.target, float), KAPPA, 0.1, 1.6, False,
-                          HopeEnvConfig().vehicle.footprint_local(), 1.25, queue)
+        m = find_takeover(packed_scene(scene).geometry, 0, *start, np.asarray(scene.target, float), KAPPA, 0.1, 1.6,
+                          False, HopeEnvConfig().vehicle.footprint_local(), 1.25, queue)
         expected = hope_shortest_first(scene, start)
         if expected is None:
             assert m == 0
+            outcomes["none"] += 1
             continue
-        assert m > 0
-        np.testing.assert_allclose(end_pose(start, queue[:m]), end_pose(start, expected), atol=1e-8)
-        assert np.abs(queue[:m, 1]).sum() == pytest.approx(np.abs(expected[:, 1]).sum())
-        accepted_longer += np.abs(expected[:, 1]).sum() > shortest_length(start, scene.target, KAPPA) + 1e-6
-    assert accepted_longer >= 1  # some trial had its shortest candidate blocked
+        np.testing.assert_allclose(merged(queue[:m]), merged(expected), atol=1e-9)
+        longer = np.abs(expected[:, 1]).sum() > shortest_length(start, scene.target, KAPPA) + 1e-6
+        outcomes["longer" if longer else "shortest"] += 1
+    assert min(outcomes.values()) >= 1, outcomes  # every branch of the rule was exercised
 
 
 def test_takeover_episode_passes_the_plan_validator():
     obstacle = [[-6.0, -2.0], [-4.0, -2.0], [-4.0, 2.0], [-6.0, 2.0]]
-    scene = Scene.from_dict({"boundary": BOUNDARY, "obstacles": [obstacle], "target": [0.0, 0.0, math.pi / 2]})
+    scene = Scene.from_dict({"boundary": BOUNDARY, "obstacles": [{"polygon": obstacle}], "target": [0.0, 0.0, math.pi / 2]})
     env = HopeParkingEnv(scene, HopeEnvConfig())
     env.reset(options={"start": [3.0, 6.0, -math.pi / 2]})  # 6.7 m away, facing against the target heading
     _, _, terminated, _, info = env.step(np.array([0.0, 0.2], np.float32))
