@@ -1,0 +1,131 @@
+"""Unified NeuralParker versus the staged Hybrid A* → learned planner on one pinned case (paper Fig. ``fig:overview``,
+§V-A, Table ``tab:twostage``).
+
+``python -m experiments.overview_case [--checkpoint PATH] [--start-seed S] [--out DIR]``
+
+One checkpoint (default the shipped Factorial one) drives the unified arm and the staged arm's downstream stage
+(`np_policy.staged.StagedPlanner`: a region-goal Hybrid A* prefix to the first state within 10 m of the target,
+then the policy from there). The paper pins a Topology-Stress pocket case (Type 2) with the Topology-Stress
+vertices policy; until that policy is trained, the case is pinned on the Factorial **training** split by this
+rule: the first long-range scene in benchmark order whose full-range start (`np_sim.starts.UniformStartSampler`,
+seed ``--start-seed``) lies beyond the hand-off radius and that both arms solve. No frozen test start is looked
+at. Writes ``overview_case.png`` (each planner one line; the staged arm's prefix, downstream arcs and connector
+share the dashed green line; the dashed circle is the hand-off boundary), ``case.md`` (L, reversals, Δκ of
+eq:metrics, the staged Δκ without the hand-off jump, and plan time per arm) and ``case.json`` into a fresh run
+folder.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.patches import Circle
+
+from experiments.common import run_folder
+from np_policy.planner import NeuralParkerPlanner
+from np_policy.staged import StagedPlanner
+from np_sim.benchmarks import load_benchmark
+from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int
+from np_sim.plan import Plan
+from np_sim.plotting import plot_scene, target_marker
+from np_sim.scene import Scene
+from np_sim.starts import UniformStartSampler
+
+DEFAULT_CHECKPOINT = Path("checkpoints/factorial_np_seed0.pt")
+UNIFIED, STAGED = "Unified NP", "Hybrid A* → NP"
+STAGED_NOTE = ("the staged arm uses NeuralParker downstream; the paper's diagnostic hands over to the adapted HOPE "
+               "planner, a row that comes when HOPE is trained")
+
+
+def find_case(unified: NeuralParkerPlanner, staged: StagedPlanner, scenes: list[Scene],
+              starts: np.ndarray) -> tuple[Scene, np.ndarray, dict[str, Plan]]:
+    """The pinned case by the rule of the module docstring: (scene, start, {arm: plan})."""
+    for scene, start in zip(scenes, starts):
+        if scene.tags.get("distance") != "long":
+            continue
+        if np.hypot(*(start[:2] - np.asarray(scene.target[:2], float))) <= staged.handoff_radius_m:
+            continue
+        plans = {UNIFIED: unified.plan(scene, start), STAGED: staged.plan(scene, start)}
+        if all(plan.success for plan in plans.values()):
+            return scene, start, plans
+    raise RuntimeError("overview_case: no long-range training start beyond the hand-off radius that both arms solve")
+
+
+def format_case(scene: Scene, plans: dict[str, Plan]) -> str:
+    """Markdown: one row per arm with eq:metrics and plan time."""
+    lines = [f"Scene `{scene.name}` (training split); {STAGED_NOTE}.", "",
+             "| Arm | Succ. | L (m) | Rev. | Δκ | plan time (ms) |", "|---|---|---|---|---|---|"]
+    for arm, plan in plans.items():
+        L, rev, dk = plan.metrics()
+        lines.append(f"| {arm} | {int(plan.success)} | {L:.2f} | {rev} | {dk:.2f} | {1e3 * plan.plan_time_s:.1f} |")
+    return "\n".join(lines)
+
+
+def draw_case(scene: Scene, plans: dict[str, Plan], radius_m: float, vehicle, png: Path) -> None:
+    """Each planner one line over the scene, the hand-off circle and the hand-off pose."""
+    figure = Figure(figsize=(10.0, 6.5), layout="constrained")
+    ax = figure.add_subplot()
+    plot_scene(ax, scene)
+    ax.get_legend().remove()
+    styles = {UNIFIED: dict(color="tab:blue", linestyle="-"), STAGED: dict(color="tab:green", linestyle="--")}
+    for arm, plan in plans.items():
+        L, rev, dk = plan.metrics()
+        ax.plot(*plan.sample(0.1)[:, :2].T, linewidth=2.0, **styles[arm],
+                label=f"{arm} (L {L:.1f} m, {rev} rev., Δκ {dk:.2f})")
+    staged = plans[STAGED]
+    handoff = staged.sample(0.1)[0] if staged.handoff_index == 0 else Plan(
+        start=staged.start, arcs=staged.arcs[: staged.handoff_index]).sample(0.1)[-1]
+    bar, stem = target_marker(handoff[:3], vehicle)
+    ax.plot(*bar.T, color="tab:green", linewidth=2.0, label="hand-off pose")
+    ax.plot(*stem.T, color="tab:green", linewidth=2.0)
+    ax.add_patch(Circle(tuple(np.asarray(scene.target[:2], float)), radius_m, fill=False, linestyle="--",
+                        edgecolor="0.4", label=f"{radius_m:g} m hand-off boundary"))
+    ax.set_title(f"{scene.name}: unified versus staged (NeuralParker downstream)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small", frameon=False)
+    figure.savefig(png, dpi=120)
+
+
+def run(checkpoint: Path = DEFAULT_CHECKPOINT, start_seed: int = 0, out: Path | None = None,
+        scenes: list[Scene] | None = None) -> dict:
+    """Pin the case (on ``scenes``, default the Factorial training split), draw it and write its table."""
+    unified = NeuralParkerPlanner.from_checkpoint(checkpoint, benchmark="factorial")
+    staged = StagedPlanner(unified)
+    scenes = load_benchmark("factorial", "train") if scenes is None else scenes
+    starts = UniformStartSampler(scenes)(np.random.default_rng(start_seed), np.arange(len(scenes)))
+    scene, start, plans = find_case(unified, staged, scenes, starts)
+    folder = run_folder("overview_case", out)
+    draw_case(scene, plans, staged.handoff_radius_m, unified.env_config.vehicle, folder / "overview_case.png")
+    table = format_case(scene, plans)
+    (folder / "case.md").write_text(table + "\n")
+    (folder / "case.json").write_text(json.dumps({
+        "checkpoint": str(checkpoint), "start_seed": start_seed, "scene": scene.name, "start": start.tolist(),
+        "note": STAGED_NOTE, "arms": {arm: dict(zip(("L", "reversals", "delta_kappa"), plan.metrics()),
+                                                success=plan.success, plan_time_s=plan.plan_time_s)
+                                      for arm, plan in plans.items()}}, indent=2, default=float))
+    return {"folder": folder, "png": folder / "overview_case.png", "table": table, "scene": scene.name}
+
+
+@cli_boundary
+def main(argv=None) -> dict:
+    """Command-line entry point (usage in the module docstring)."""
+    parser = argparse.ArgumentParser(prog="python -m experiments.overview_case", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--checkpoint", type=existing_file, default=DEFAULT_CHECKPOINT,
+                        help=f"NeuralParker checkpoint driving both arms (default {DEFAULT_CHECKPOINT})")
+    parser.add_argument("--start-seed", type=non_negative_int, default=0,
+                        help="seed of the one full-range start per training scene (default 0)")
+    parser.add_argument("--out", type=fresh_folder,
+                        help="new or empty run folder (default: a fresh results/overview_case/<timestamp>)")
+    args = parser.parse_args(argv)
+    result = run(args.checkpoint, args.start_seed, args.out)
+    print(result["table"])
+    print(f"wrote {result['png']}")
+    return result
+
+
+if __name__ == "__main__":
+    main()
