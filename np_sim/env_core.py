@@ -9,14 +9,15 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from np_sim.bev import render_bev_batch
 from np_sim.config import EnvConfig
-from np_sim.errors import ConfigError
+from np_sim.errors import ConfigError, StartInCollisionError
 from np_sim.kernels import step as K
 from np_sim.kernels.collision import pose_valid
 from np_sim.kernels.geometry import beam_offsets
 from np_sim.kernels.hermite import hermite_basis
 from np_sim.lidar import footprint_ranges
-from np_sim.observation import observation_size, static_slots
+from np_sim.observation import bev_encoder, observation_sections, observation_size, static_slots
 from np_sim.scene import Scene
 from np_sim.scene_arrays import pack_scenes
 from np_sim.starts import StartSampler, UniformStartSampler
@@ -96,6 +97,8 @@ class BatchCore:
         self.R = np.zeros((n, K.R_SIZE))
         self.obs = np.zeros((n, self.obs_size), np.float32)
         self._corners = np.empty((4, 2))
+        self.bev = bev_encoder(config.observation) if config.observation.use_bev else None
+        self._all = np.arange(n)
 
     # ------------------------------------------------------------------------------------------------------------
     def reset_envs(self, env_ids: np.ndarray, rng: np.random.Generator, scene_index=None, start=None) -> None:
@@ -118,7 +121,7 @@ class BatchCore:
             for pose, k in zip(poses, scenes):
                 if not pose_valid(self.geo, k, pose[0], pose[1], pose[2], self.config.collision == "footprint",
                                   self.local, self._corners):
-                    raise ConfigError(
+                    raise StartInCollisionError(
                         f"reset: start pose {pose.tolist()} is in collision in scene "
                         f"{self.scenes[k].name or k!r} under the {self.config.collision} convention"
                     )
@@ -127,6 +130,7 @@ class BatchCore:
         self.S[env_ids, K.S_SCENE] = scenes
         K.observe_batch(self.geo, self.arrays.targets, self.static_obs, self.S, self.P, self.b_ranges, self.off_c,
                         self.off_s, env_ids, self.obs)
+        self.observe_bev(env_ids)
 
     def step(self, actions: np.ndarray) -> None:
         """Advance every env by its normalised action row; fills ``obs`` and ``R``."""
@@ -143,6 +147,18 @@ class BatchCore:
                      self.local, self.b_ranges, self.off_c, self.off_s, self.offsets, self.headings, self.scales0,
                      self.scales1, self.basis, self.dbasis, self.h_pts, self.h_kbar_max, self.h_dk, self.h_len,
                      self.h_cost, self.obs, self.R)
+        self.observe_bev(self._all)
+
+    def observe_bev(self, env_ids: np.ndarray) -> None:
+        """With ``use_bev``: the BEV latent of the envs ``env_ids`` at their current poses (ego-aligned raster, no
+        trajectory tail, frozen encoder; paper App. B) into their observation rows."""
+        if self.bev is None or len(env_ids) == 0:
+            return
+        images = render_bev_batch(self.arrays, self.S[env_ids, K.S_SCENE].astype(np.int64),
+                                  self.S[env_ids, K.S_X: K.S_TH + 1], config=self.bev.raster,
+                                  vehicle=self.config.vehicle)
+        start, stop = observation_sections(self.config.observation)["bev"]
+        self.obs[env_ids, start:stop] = self.bev(images)
 
     def episode_metrics(self) -> dict[str, np.ndarray]:
         """Per env, the paper's eq:metrics of the episode so far including a Hermite segment of the last step:

@@ -16,3 +16,8 @@ class CapacityError(SceneError):
 
 class ConfigError(NPSimError, ValueError):
     """A configuration value or key is invalid."""
+
+
+class StartInCollisionError(ConfigError):
+    """A start pose given to an environment reset (and so to a planner rolling out from it) is in collision under
+    the collision convention in use: the message names the pose, the scene and the convention."""

@@ -47,16 +47,15 @@ import shapely
 
 from np_sim.clips import Clip
 from np_sim.collision import path_valid
-from np_sim.errors import ConfigError
+from np_sim.errors import StartInCollisionError
 from np_sim.frames import place
 from np_sim.plan import Plan
 from np_sim.scene import PolygonObstacle, Scene
 from tracking.config import ExecutorConfig, TrackerConfig, WorldConfig
 from tracking.executor import execute, parked, plan_problem
 from tracking.movers import Mover, poses_at
-from tracking.record import Contact
 from tracking.observer import Observers, RunObserver, TrajectoryRecorder
-from tracking.record import ExecutionRecord
+from tracking.record import Contact, ExecutionRecord
 from tracking.stitching import StitchedPlan, stitch_distance
 from tracking.validators import validate_plan
 from tracking.world import build_world
@@ -276,6 +275,103 @@ def _waiting_contacts(ground: ClipWorld, start: np.ndarray, times: np.ndarray, v
     return sorted(touches, key=lambda c: c.time_s)
 
 
+class ReplanningLoop:
+    """The planner side of a clip run (module docstring): the first plan and its retries at the start, the replan
+    decision at each frame (`replan`, the executor's ``replan`` hook) and stitching.
+
+    State: ``calls`` (every planner call), ``followed`` (the plan the tracker follows and the vehicle's progress
+    along it, None before the first usable plan), ``retry_at_s`` (no planner call before this sim time: set after a
+    failed call) and ``previous_pose`` (the pose of the last replan decision, telling a standing vehicle)."""
+
+    def __init__(self, clip: Clip, planner, config: ClipRunConfig, log=None):
+        self.clip, self.planner, self.config, self.log = clip, planner, config, log
+        self.tracker = config.tracker
+        self.convention = planner_convention(planner)
+        self.calls: list[PlanCall] = []
+        self.followed: _FollowedPath | None = None
+        self.retry_at_s = 0.0
+        self.previous_pose = np.asarray(clip.start, float)
+
+    @property
+    def last_usable(self) -> bool:
+        """The latest planner call gave a plan the tracker follows."""
+        return self.calls[-1].usable
+
+    def frame_scene(self, t: float, pose: np.ndarray) -> tuple[int, Scene]:
+        """The clip frame of sim time ``t`` (⌊t / frame period⌉, clamped to the last frame) and its detections
+        around ``pose``."""
+        frame = min(int(round(t / self.clip.frame_dt_s)), self.clip.n_frames - 1)
+        return frame, self.clip.frame_scene(frame, pose=pose, track_window=self.config.track_window)
+
+    def call(self, pose: np.ndarray, t: float, frame: int, scene: Scene, prefix: tuple | None = None) -> Plan:
+        """Call the planner from ``pose``; a usable plan becomes the followed one, after the stretch ``prefix`` =
+        (followed path, s_from, s_to) of the followed plan when given (a `StitchedPlan`)."""
+        try:
+            plan = self.planner.plan(scene, pose)
+        except StartInCollisionError as error:
+            plan = Plan(start=np.asarray(pose, float), reason=f"refused: {error}")
+        rejected = plan_problem(plan, self.tracker)[0] if plan.success else ""
+        self.calls.append(PlanCall(time_s=t, frame=frame, success=bool(plan.success), plan_time_s=plan.plan_time_s,
+                                   rejected=rejected))
+        if not self.last_usable:
+            self.retry_at_s = t + self.config.retry_period_s
+        if self.log is not None:
+            self.log.log_detections(t, scene)
+        if self.last_usable:
+            if prefix is not None:
+                plan = StitchedPlan.join(prefix[0].plan, prefix[1], prefix[2], plan)
+            self.followed = _FollowedPath(plan, self.config.check_ds_m)
+        return plan
+
+    def first_plan(self) -> tuple[Plan, Plan, float]:
+        """(plan of the call at t = 0, plan to drive, sim time it was planned at): the vehicle waits at its start,
+        calling again every ``retry_period_s`` until a plan is usable or ``first_plan_wait_s`` has passed."""
+        start = np.asarray(self.clip.start, float)
+        first = self.call(start, 0.0, *self.frame_scene(0.0, start))
+        driven, t0 = first, 0.0
+        while not self.last_usable and t0 + self.config.retry_period_s <= self.config.first_plan_wait_s + 1e-9:
+            t0 += self.config.retry_period_s
+            driven = self.call(start, t0, *self.frame_scene(t0, start))
+        return first, driven, t0
+
+    def replan(self, pose: np.ndarray, t: float) -> Plan | None:
+        """The executor's replanning hook: a new plan from ``pose`` at sim time ``t``, or None when the vehicle is
+        parked, a failed call was too recent or (``on_invalid``) the followed plan still holds."""
+        moved = math.hypot(pose[0] - self.previous_pose[0], pose[1] - self.previous_pose[1])
+        period_s = self.tracker.executor.replan_period_s
+        standing = moved < self.tracker.executor.rest_speed_mps * period_s
+        self.previous_pose = np.array(pose, float)
+        if parked(pose, self.clip.target, self.tracker.executor):
+            return None  # a parked vehicle starts no new manoeuvre
+        if t < self.retry_at_s - 1e-9:
+            return None
+        frame, scene = self.frame_scene(t, pose)
+        path = self.followed
+        if self.config.replan == "on_invalid" and path is not None:
+            off = path.advance(pose)
+            if (off <= self.config.deviation_m and not (standing and path.at_end)
+                    and path_valid(scene, path.remaining(), self.convention, self.tracker.vehicle)):
+                return None  # the followed plan still holds (standing at its end short of the target: it does not)
+            if self.config.stitch and not standing and off <= self.config.deviation_m:
+                plan = self.stitched(path, moved / period_s, t, frame, scene)
+                if plan is not None:
+                    return plan
+        return self.call(pose, t, frame, scene)
+
+    def stitched(self, path: _FollowedPath, speed_mps: float, t: float, frame: int, scene: Scene) -> Plan | None:
+        """A replan from the followed plan's pose the vehicle can still stop at (`tracking.stitching`), or None
+        when that pose is past the plan's end or the stretch up to it is no longer free in ``scene``."""
+        s_now = float(path.rows[path.index, 5])
+        ahead = stitch_distance(speed_mps, self.tracker.profile.accel_mps2, self.tracker.executor.replan_period_s,
+                                self.config.stitch_margin_m)
+        k = int(np.searchsorted(path.rows[:, 5], s_now + ahead))
+        if k >= len(path.rows) - 1 or not path_valid(scene, path.poses[path.index:k + 1], self.convention,
+                                                      self.tracker.vehicle):
+            return None
+        # planned in the frame's scene around the vehicle, the one the next frames check the plan against
+        return self.call(path.poses[k].copy(), t, frame, scene, prefix=(path, s_now, float(path.rows[k, 5])))
+
+
 def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunConfig | None = None,
              rerun_path: str | Path | None = None, render: bool = False) -> ClipRun:
     """Drive ``clip`` in closed loop with ``planner`` replanning once per frame (module docstring).
@@ -285,7 +381,8 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
     clip
         A site clip (`np_sim.clips.load_clips`).
     planner
-        Anything with ``plan(scene, start) -> Plan`` (NeuralParker, NP-Guided A*, Hybrid A*).
+        Anything with ``plan(scene, start) -> Plan`` (NeuralParker, NP-Guided A*, Hybrid A*); a
+        `np_sim.errors.StartInCollisionError` it raises counts as a failed call, any other error propagates.
     controller
         Lateral controller of the tracker.
     config
@@ -297,72 +394,8 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
     """
     config = ClipRunConfig() if config is None else config
     tracker = config.tracker
+    loop = ReplanningLoop(clip, planner, config)
     ground = clip_world(clip)
-    dt = clip.frame_dt_s
-    convention = planner_convention(planner)
-    calls: list[PlanCall] = []
-    log = None
-    followed: list[_FollowedPath] = []
-    wait_until = [0.0]
-
-    def plan_at(pose: np.ndarray, t: float, frame: int, scene: Scene, prefix: tuple | None = None) -> Plan:
-        """Call the planner from ``pose``; with ``prefix`` = (followed path, s_from, s_to) the usable plan is
-        followed after that stretch of the followed plan (a `StitchedPlan`)."""
-        try:
-            plan = planner.plan(scene, pose)
-        except ConfigError as error:  # NeuralParker refuses a start in collision under its convention
-            plan = Plan(start=np.asarray(pose, float), reason=f"refused: {error}")
-        rejected = plan_problem(plan, tracker)[0] if plan.success else ""
-        calls.append(PlanCall(time_s=t, frame=frame, success=bool(plan.success), plan_time_s=plan.plan_time_s,
-                              rejected=rejected))
-        if not calls[-1].usable:
-            wait_until[0] = t + config.retry_period_s
-        if log is not None:
-            log.log_detections(t, scene)
-        if calls[-1].usable:
-            if prefix is not None:
-                plan = StitchedPlan.join(prefix[0].plan, prefix[1], prefix[2], plan)
-            followed[:] = [_FollowedPath(plan, config.check_ds_m)]
-        return plan
-
-    def stitched(path: _FollowedPath, speed_mps: float, t: float, frame: int, scene: Scene) -> Plan | None:
-        """A replan from the followed plan's pose the vehicle can still stop at, or None when that pose is past
-        the plan's end or the stretch up to it is no longer free in ``scene``."""
-        s_now = float(path.rows[path.index, 5])
-        ahead = stitch_distance(speed_mps, tracker.profile.accel_mps2, tracker.executor.replan_period_s,
-                                config.stitch_margin_m)
-        k = int(np.searchsorted(path.rows[:, 5], s_now + ahead))
-        if k >= len(path.rows) - 1 or not path_valid(scene, path.poses[path.index:k + 1], convention,
-                                                      tracker.vehicle):
-            return None
-        # planned in the frame's scene around the vehicle, the one the next frames check the plan against
-        return plan_at(path.poses[k].copy(), t, frame, scene, prefix=(path, s_now, float(path.rows[k, 5])))
-
-    previous_pose = [np.asarray(clip.start, float)]
-    rest_step_m = tracker.executor.rest_speed_mps * tracker.executor.replan_period_s
-
-    def replan(pose: np.ndarray, t: float) -> Plan | None:
-        moved = math.hypot(pose[0] - previous_pose[0][0], pose[1] - previous_pose[0][1])
-        standing = moved < rest_step_m
-        previous_pose[0] = np.array(pose, float)
-        if parked(pose, clip.target, tracker.executor):
-            return None  # a parked vehicle starts no new manoeuvre
-        if t < wait_until[0] - 1e-9:
-            return None  # shortly after a failed call
-        frame = min(int(round(t / dt)), clip.n_frames - 1)
-        scene = clip.frame_scene(frame, pose=pose, track_window=config.track_window)
-        if config.replan == "on_invalid" and followed:
-            path = followed[0]
-            off = path.advance(pose)
-            if (off <= config.deviation_m and not (standing and path.at_end)
-                    and path_valid(scene, path.remaining(), convention, tracker.vehicle)):
-                return None  # the followed plan still holds (standing at its end short of the target: it does not)
-            if config.stitch and not standing and off <= config.deviation_m:
-                plan = stitched(path, moved / tracker.executor.replan_period_s, t, frame, scene)
-                if plan is not None:
-                    return plan
-        return plan_at(pose, t, frame, scene)
-
     start = np.asarray(clip.start, float)
     world = build_world(ground.scene, start, tracker, ground.movers)
     recorder = TrajectoryRecorder()
@@ -370,34 +403,35 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
     if rerun_path is not None:
         from tracking.clip_log import ClipRerunObserver
 
-        log = ClipRerunObserver(world, tracker, Path(rerun_path), render, clip_name=clip.name)
-        parts.append(log)
-    first = plan_at(start, 0.0, 0, clip.frame_scene(0, pose=start, track_window=config.track_window))
-    driven, t0 = first, 0.0
-    while not calls[-1].usable and t0 + config.retry_period_s <= config.first_plan_wait_s + 1e-9:
-        t0 += config.retry_period_s
-        frame = min(int(round(t0 / dt)), clip.n_frames - 1)
-        driven = plan_at(start, t0, frame, clip.frame_scene(frame, pose=start, track_window=config.track_window))
+        loop.log = ClipRerunObserver(world, tracker, Path(rerun_path), render, clip_name=clip.name)
+        parts.append(loop.log)
+    first, driven, t0 = loop.first_plan()
     if t0 > 0.0:
         recorder.start_time_s = t0
-    gt0 = clip.frame_scene(0, ground_truth=True)
-    record = execute(ground.scene, driven, controller, replan=replan, config=tracker, observer=Observers(parts),
-                     world=world, start_time_s=t0 if calls[-1].usable else 0.0)
-    waiting = np.arange(0.0, t0, tracker.executor.control_dt_s) if calls[-1].usable else np.zeros(0)
-    if len(waiting):
-        touches = _waiting_contacts(ground, start, waiting, tracker.vehicle)
-        if touches:
-            record = dataclasses.replace(
-                record, success=False, contacts=touches + list(record.contacts), reason="contact",
-                detail=f"chassis touched {touches[0].geom} at t = {touches[0].time_s:.2f} s (waiting at the start)")
-    if rerun_path is not None and record.reason in ("plan_failed", "empty_plan", "steering_limit",
-                                                    "start_in_collision"):
-        log.finish_unrun(record)  # the executor returned before the loop started: no hooks were called
-    stands_parked = record.reason in ("", "contact") and parked(record.final_pose, clip.target, tracker.executor)
+    record = execute(ground.scene, driven, controller, replan=loop.replan, config=tracker,
+                     observer=Observers(parts), world=world, start_time_s=t0 if loop.last_usable else 0.0)
+    waiting = np.arange(0.0, t0, tracker.executor.control_dt_s) if loop.last_usable else np.zeros(0)
+    record = _with_waiting_contacts(record, ground, start, waiting, tracker.vehicle)
+    if loop.log is not None and record.reason in ("plan_failed", "empty_plan", "steering_limit",
+                                                  "start_in_collision"):
+        loop.log.finish_unrun(record)  # the executor returned before the loop started: no hooks were called
     trajectory = recorder.array() if recorder.rows else np.array([[0.0, *start]])
     if len(waiting):
         trajectory = np.vstack([np.column_stack([waiting, np.tile(start, (len(waiting), 1))]), trajectory])
-    return ClipRun(record=record, first_plan=first, calls=calls, trajectory=trajectory,
+    stands_parked = record.reason in ("", "contact") and parked(record.final_pose, clip.target, tracker.executor)
+    return ClipRun(record=record, first_plan=first, calls=loop.calls, trajectory=trajectory,
                    parked=stands_parked,
                    reference_point_detail=reference_point_violation(clip, ground, trajectory) if stands_parked else "",
-                   first_plan_valid=validate_plan(gt0, first))
+                   first_plan_valid=validate_plan(clip.frame_scene(0, ground_truth=True), first))
+
+
+def _with_waiting_contacts(record: ExecutionRecord, ground: ClipWorld, start: np.ndarray, waiting: np.ndarray,
+                           vehicle) -> ExecutionRecord:
+    """``record`` with the movers' touches of the vehicle waiting at ``start`` at the times ``waiting`` before
+    its drive began (a failed contact-free run when there are any)."""
+    touches = _waiting_contacts(ground, start, waiting, vehicle) if len(waiting) else []
+    if not touches:
+        return record
+    return dataclasses.replace(
+        record, success=False, contacts=touches + list(record.contacts), reason="contact",
+        detail=f"chassis touched {touches[0].geom} at t = {touches[0].time_s:.2f} s (waiting at the start)")

@@ -1,8 +1,14 @@
-"""tracking.clip_run: a vehicle whose first planner calls fail waits at its start and retries."""
+"""tracking.clip_run: a vehicle whose first planner calls fail waits at its start and retries; a start in
+collision is a failed call, any other configuration error stops the run; stitched replans."""
+
+import dataclasses
 
 import numpy as np
+import pytest
+import shapely
 
 from np_sim.clips import load_clips
+from np_sim.errors import ConfigError, StartInCollisionError
 from np_sim.plan import Plan
 from np_sim.planners import HybridAStar
 from tracking.clip_run import ClipRunConfig, run_clip
@@ -98,3 +104,33 @@ def test_stitched_replans_start_ahead_on_the_followed_plan():
         assert np.min(np.hypot(*(earlier - start[:2]).T)) < 0.01  # a pose of the plan it was following
         assert np.hypot(*(start[:2] - vehicle[:2])) >= ClipRunConfig().stitch_margin_m - 0.05  # ahead of it
     assert stitched >= 1
+
+
+def test_a_start_in_collision_is_a_failed_call_and_the_vehicle_waits_at_its_start():
+    from np_policy.planner import NeuralParkerPlanner
+
+    clip = next(c for c in load_clips("eval") if c.name == "eval-1000016")
+    nearest = clip.frame_scene(0, pose=clip.start).obstacles[0].vertices
+    inside = shapely.Polygon(nearest).representative_point()  # a point inside the nearest detected object
+    moved = dataclasses.replace(clip, start=np.array([inside.x, inside.y, clip.start[2]]))
+    planner = NeuralParkerPlanner.from_checkpoint("checkpoints/site_np.pt", benchmark="site")  # reference point
+    with pytest.raises(StartInCollisionError, match="in collision"):
+        planner.plan(moved.frame_scene(0, pose=moved.start), moved.start)
+    run = run_clip(moved, planner, config=ClipRunConfig(first_plan_wait_s=1.0))
+    assert run.first_plan.reason.startswith("refused: reset: start pose") and "in collision" in run.first_plan.reason
+    assert [(c.time_s, c.success) for c in run.calls] == [(0.0, False), (0.5, False), (1.0, False)]
+    assert run.record.reason == "plan_failed" and not run.parked
+
+
+class Misconfigured(FailingFirst):
+    """A planner whose first call raises a configuration error that is not a start in collision."""
+
+    def plan(self, scene, start):
+        raise ConfigError("HybridAStarConfig.step_m: expected a finite positive number, got -1.0")
+
+
+def test_a_configuration_error_other_than_a_start_in_collision_propagates():
+    clip = next(c for c in load_clips("eval") if c.name == "eval-1000016")
+    with pytest.raises(ConfigError, match="step_m") as caught:
+        run_clip(clip, Misconfigured(0))
+    assert not isinstance(caught.value, StartInCollisionError)
