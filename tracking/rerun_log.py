@@ -13,14 +13,23 @@ Entity paths:
   steer_curvature_ref, speed_mps, speed_target_mps;
 * ``camera/topdown``, ``camera/chase`` (JPEG frames on ``sim_time``) when rendering;
 * ``run/outcome`` (text): success, reason and the tracking figures.
+
+Every recording is named after its file (``<clip>_<planner>`` in a clip run) and carries the viewer layout
+`run_blueprint`; `merge_recordings` merges the recordings of several runs into one optimised file.
 """
 
 from __future__ import annotations
 
+import shutil
+import subprocess
+import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 import rerun as rr
+import rerun.blueprint as rrb
+from rerun.chunk import RrdReader
 
 from np_sim.scene import CircleObstacle
 from tracking.config import TrackerConfig
@@ -34,8 +43,61 @@ _SCALARS = ("cross_track_m", "heading_error_rad", "steer_curvature_cmd", "steer_
 """Controller scalars, logged under ``controller/``."""
 
 
+APPLICATION_ID = "neuralparker_tracking"
+"""Rerun application id of every closed-loop recording (the viewer applies a blueprint per application)."""
+
+WORLD_ORIGIN = "world"
+"""Origin of the 2-D world view: every ``world/...`` entity is drawn in it."""
+
+
 def _closed(ring: np.ndarray) -> np.ndarray:
     return np.vstack([ring, ring[:1]])
+
+
+def run_blueprint() -> rrb.Blueprint:
+    """The viewer layout of a run: the 2-D world (scene, movers, detections, plans, footprint, executed path,
+    contacts) on the left; on the right the two cameras side by side, the controller scalars in one time-series
+    panel and the outcome text."""
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Spatial2DView(name="World", origin=WORLD_ORIGIN),
+            rrb.Vertical(
+                rrb.Horizontal(rrb.Spatial2DView(name="Top-down camera", origin="camera/topdown"),
+                               rrb.Spatial2DView(name="Chase camera", origin="camera/chase")),
+                rrb.TimeSeriesView(name="Controller", origin="controller"),
+                rrb.TextLogView(name="Outcome", origin="run"),
+                row_shares=[3, 3, 1]),
+            column_shares=[3, 2]),
+        auto_views=False)
+
+
+def merge_recordings(files: list[Path], out: Path) -> Path:
+    """Merge the recordings in ``files`` into ``out`` with one copy of `run_blueprint` and optimise it (``rerun rrd
+    optimize``: each recording's many small chunks compacted into about one per entity); returns ``out``.
+
+    The blueprint each file carries is left out (they are all `run_blueprint`; one copy per run would add a dozen
+    chunks per run to the merged file)."""
+    if not files:
+        raise ValueError(f"merge_recordings: expected at least one .rrd file to merge into {out}, got none")
+    exe = Path(sys.executable).parent / "rerun"
+    exe = str(exe) if exe.exists() else shutil.which("rerun")
+    if exe is None:
+        raise FileNotFoundError("merge_recordings: the 'rerun' command is missing; install rerun-sdk into the venv")
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=out.parent) as folder:
+        parts = []
+        for k, path in enumerate(files):
+            reader = RrdReader(str(path))
+            for entry in reader.recordings():
+                parts.append(Path(folder) / f"{k}_{entry.recording_id}.rrd")
+                reader.store(store=entry).write_rrd(parts[-1], application_id=entry.application_id,
+                                                    recording_id=entry.recording_id)
+        layout = Path(folder) / "layout.rbl"
+        run_blueprint().save(APPLICATION_ID, str(layout))
+        subprocess.run([exe, "rrd", "optimize", "-o", str(out), *map(str, parts), str(layout)], check=True,
+                       capture_output=True)
+    return out
 
 
 class RerunObserver(RunObserver):
@@ -44,8 +106,9 @@ class RerunObserver(RunObserver):
     def __init__(self, world, config: TrackerConfig, path: Path, render: bool):
         self.config, self.vehicle = config, config.vehicle
         path.parent.mkdir(parents=True, exist_ok=True)
-        self.rec = rr.RecordingStream("neuralparker_tracking")
-        self.rec.save(str(path))
+        self.rec = rr.RecordingStream(APPLICATION_ID)
+        self.rec.save(str(path), default_blueprint=run_blueprint())
+        self.rec.send_recording_name(path.stem)
         self.every = max(1, config.executor.log_every)
         self.steps = 0
         self.times: list[float] = []
