@@ -130,12 +130,14 @@ class HopeEnvConfig:
             if getattr(self, name) < 1:
                 raise ConfigError(f"HopeEnvConfig.{name}: expected an integer >= 1, got {getattr(self, name)!r}")
         if not self.max_steer_rad < 0.5 * math.pi:
-            raise ConfigError(f"HopeEnvConfig.max_steer_rad: expected a steering angle below π/2, got {self.max_steer_rad}")
+            raise ConfigError(
+                f"HopeEnvConfig.max_steer_rad: expected a steering angle below π/2, got {self.max_steer_rad}")
         if self.connector.kappa_max > self.vehicle.kappa_max:
             raise ConfigError(f"HopeEnvConfig.connector.kappa_max={self.connector.kappa_max} exceeds "
                               f"HopeEnvConfig.vehicle.kappa_max={self.vehicle.kappa_max}")
         if self.connector.mode not in ("fixed", "ensemble"):
-            raise ConfigError(f"HopeEnvConfig.connector.mode: expected 'fixed' or 'ensemble', got {self.connector.mode!r}")
+            raise ConfigError(
+                f"HopeEnvConfig.connector.mode: expected 'fixed' or 'ensemble', got {self.connector.mode!r}")
 
     @property
     def kappa_max(self) -> float:

@@ -166,10 +166,10 @@ class HopeCore:
             raise ValueError(f"step: action[{bad[0]}] = {a[bad[0]].tolist()} lies outside the action space "
                              "[-1, 1]^2 (the env never clips; clip or squash in the policy)")
         b = self.base
-        K.step_batch(self.geo, self.targets, self.S, self.P, self.W, np.ascontiguousarray(action_to_arc(a, self.config)),
-                     b.local, self.queue, b.b_ranges, b.off_c, b.off_s, self.mask_tables, b.offsets, b.headings,
-                     b.scales0, b.scales1, b.basis, b.dbasis, b.h_pts, b.h_kbar_max, b.h_dk, b.h_len, b.h_cost,
-                     self.lidar, self.target, self.mask, self.R)
+        arcs = np.ascontiguousarray(action_to_arc(a, self.config))
+        K.step_batch(self.geo, self.targets, self.S, self.P, self.W, arcs, b.local, self.queue, b.b_ranges, b.off_c,
+                     b.off_s, self.mask_tables, b.offsets, b.headings, b.scales0, b.scales1, b.basis, b.dbasis,
+                     b.h_pts, b.h_kbar_max, b.h_dk, b.h_len, b.h_cost, self.lidar, self.target, self.mask, self.R)
         rows, steps = np.arange(self.num_envs), self.S[:, K.S_STEPS].astype(np.int64)
         self.arc_log[rows, steps - 1] = self.R[:, K.R_KAPPA:K.R_LENGTH + 1]
         self.pose_log[rows, steps] = self.S[:, K.S_X:K.S_TH + 1]
@@ -286,6 +286,20 @@ class HopeVectorEnv(VectorEnv):
     def set_start_sampler(self, sampler: StartSampler) -> None:
         """Replace the start sampler (e.g. when the curriculum fraction changes)."""
         self.core.base.sampler = sampler
+
+    def state_dict(self) -> dict[str, Any]:
+        """Episode state of every env (poses, counters, takeover queues, episode logs, current observations) and
+        the start generator's state, for exact resumption of training."""
+        core = self.core
+        names = ("S", "R", "queue", "starts", "arc_log", "pose_log", "lidar", "target", "mask")
+        return {**{name: getattr(core, name).copy() for name in names}, "rng": self._rng.bit_generator.state}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Inverse of ``state_dict``."""
+        for name, value in state.items():
+            if name != "rng":
+                getattr(self.core, name)[:] = value
+        self._rng.bit_generator.state = state["rng"]
 
     def pending_takeover(self) -> tuple[np.ndarray, np.ndarray]:
         """(queued, actions): which envs will execute a takeover chunk at the next step, whatever the action, and

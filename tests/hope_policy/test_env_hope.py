@@ -182,6 +182,25 @@ def test_vector_env_equals_single_env_and_is_deterministic():
             np.testing.assert_array_equal(s_obs[key], obs[key][i])
 
 
+def test_state_dict_resumes_exactly():
+    scenes = example_scenes()
+    venv = HopeVectorEnv(scenes, 3, HopeEnvConfig(), seed=5)
+    venv.reset()
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-1, 1, (30, 3, 2))
+    for a in actions[:10]:
+        venv.step(a)
+    state = venv.state_dict()
+    resumed = HopeVectorEnv(scenes, 3, HopeEnvConfig(), seed=99)
+    resumed.reset()
+    resumed.load_state_dict(state)
+    for a in actions[10:]:
+        out_a, out_b = venv.step(a), resumed.step(a)
+        for key in out_a[0]:
+            np.testing.assert_array_equal(out_a[0][key], out_b[0][key])
+        np.testing.assert_array_equal(out_a[1], out_b[1])
+
+
 def test_same_step_autoreset_reports_final_observation_and_plan():
     venv = HopeVectorEnv([open_lot()], 2, NO_EXTRAS, seed=0)
     venv.reset(options={"start": [[0.0, -1.0, math.pi / 2], [10.0, -10.0, 0.0]]})

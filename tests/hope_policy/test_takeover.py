@@ -123,7 +123,8 @@ def test_search_matches_hopes_shortest_first_rule_with_shapely_checks():
 
 def test_takeover_episode_passes_the_plan_validator():
     obstacle = [[-6.0, -2.0], [-4.0, -2.0], [-4.0, 2.0], [-6.0, 2.0]]
-    scene = Scene.from_dict({"boundary": BOUNDARY, "obstacles": [{"polygon": obstacle}], "target": [0.0, 0.0, math.pi / 2]})
+    scene = Scene.from_dict({"boundary": BOUNDARY, "obstacles": [{"polygon": obstacle}],
+                             "target": [0.0, 0.0, math.pi / 2]})
     env = HopeParkingEnv(scene, HopeEnvConfig())
     env.reset(options={"start": [3.0, 6.0, -math.pi / 2]})  # 6.7 m away, facing against the target heading
     _, _, terminated, _, info = env.step(np.array([0.0, 0.2], np.float32))
