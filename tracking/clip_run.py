@@ -55,6 +55,7 @@ from tracking.config import ExecutorConfig, TrackerConfig, WorldConfig
 from tracking.executor import execute, parked, plan_problem
 from tracking.movers import Mover, poses_at
 from tracking.observer import Observers, RunObserver, TrajectoryRecorder
+from tracking.perception import perceived_scene
 from tracking.record import Contact, ExecutionRecord
 from tracking.stitching import StitchedPlan, stitch_distance
 from tracking.validators import validate_plan
@@ -88,8 +89,8 @@ class ClipRunConfig:
     first_plan_wait_s: float = 5.0
     """How long a vehicle whose first plan failed waits at its start, retrying every ``retry_period_s`` (s)."""
     track_window: int = 1
-    """Frames the planner's detections are filtered over (`Clip.tracked_detections`); 1 = each frame's raw
-    detections, as the paper's vehicle used them."""
+    """Frames the planner's detections are filtered over (`tracking.perception.tracked_detections`); 1 = each
+    frame's raw detections, as the paper's vehicle used them."""
     stitch: bool = False
     """``on_invalid``: a replan of a moving vehicle that is on its followed plan starts from the pose of that plan
     it can still stop at (`tracking.stitching`) and the vehicle drives the followed plan up to there, when that
@@ -301,7 +302,7 @@ class ReplanningLoop:
         """The clip frame of sim time ``t`` (⌊t / frame period⌉, clamped to the last frame) and its detections
         around ``pose``."""
         frame = min(int(round(t / self.clip.frame_dt_s)), self.clip.n_frames - 1)
-        return frame, self.clip.frame_scene(frame, pose=pose, track_window=self.config.track_window)
+        return frame, perceived_scene(self.clip, frame, pose=pose, track_window=self.config.track_window)
 
     def call(self, pose: np.ndarray, t: float, frame: int, scene: Scene, prefix: tuple | None = None) -> Plan:
         """Call the planner from ``pose``; a usable plan becomes the followed one, after the stretch ``prefix`` =

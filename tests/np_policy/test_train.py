@@ -185,14 +185,14 @@ def test_init_warm_starts_a_new_run_under_another_convention(tmp_path):
 
 
 def test_the_site_pool_is_kept_in_the_run_folder_and_redrawn_when_its_settings_differ(tmp_path, monkeypatch):
-    import np_sim.clips as clips_module
+    import np_sim.clips.resets as resets_module
     from np_sim.clips import cached_training_pool, load_clips
 
     clips = load_clips("eval")[:3]
     path = tmp_path / "site_pool.pkl"
     scenes, starts = cached_training_pool(path, 3, seed=5, clips=clips)
     drawn = []
-    monkeypatch.setattr(clips_module, "training_pool", lambda *a, **k: drawn.append(a) or (scenes[:1], starts[:1]))
+    monkeypatch.setattr(resets_module, "training_pool", lambda *a, **k: drawn.append(a) or (scenes[:1], starts[:1]))
     again, starts_again = cached_training_pool(path, 3, seed=5)  # read back: no clips needed
     assert not drawn and [s.to_dict() for s in again] == [s.to_dict() for s in scenes]
     assert (starts_again == starts).all()

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 import shapely
-from shapely.geometry import Point
+from shapely.geometry import LineString, Point
 from shapely.geometry import Polygon as ShapelyPolygon
 
 from np_sim import clips as clips_module
@@ -28,6 +28,7 @@ from np_sim.clips import (
     training_pool,
     split_of_seed,
 )
+from np_sim.clips.generation import mover_poses
 from np_sim.collision import path_valid
 from np_sim.errors import ConfigError
 from np_sim.geodesic import geodesic_grid
@@ -130,36 +131,6 @@ def test_ground_truth_is_stored_apart_and_detections_differ_by_bounded_jitter(ev
         residuals.append((sd, clip.jitter_sd_m))
         assert 0.7 * clip.jitter_sd_m < sd < 1.15 * clip.jitter_sd_m
     assert 0.05 <= min(j for _, j in residuals) and max(j for _, j in residuals) <= 0.15
-
-
-def test_tracked_detections_average_the_jitter_and_hold_dropouts(eval_clips):
-    clip = max(eval_clips, key=lambda c: c.jitter_sd_m)
-    static = {o.id for o in clip.objects if not o.moving}
-    raw_err, tracked_err, held = [], [], 0
-    for frame in range(10, clip.n_frames, 5):
-        ids, polygons = clip.detections(clip.detection_frame(frame))
-        one_ids, one = clip.tracked_detections(frame, 1)
-        assert np.array_equal(np.sort(ids), one_ids)  # window 1 is the raw frame
-        assert np.allclose(one, polygons[np.argsort(ids)])
-        t_ids, tracked = clip.tracked_detections(frame, 8)
-        assert set(ids) <= set(t_ids.tolist())
-        held += len(set(t_ids.tolist()) - set(ids.tolist()))
-        truth = clip.ground_truth(frame)
-        for oid, det in zip(ids, polygons):
-            if oid in static and len(truth[oid]) == 4:
-                raw_err.append(np.linalg.norm(det[None] - truth[oid][:, None], axis=2).min(axis=1).mean())
-        for oid, det in zip(t_ids, tracked):
-            if oid in static and len(truth[oid]) == 4:
-                tracked_err.append(np.linalg.norm(det[None] - truth[oid][:, None], axis=2).min(axis=1).mean())
-    # the mean of up to 8 jittered detections is about √8 ≈ 2.8 times closer to the truth than one
-    assert np.mean(tracked_err) < 0.6 * np.mean(raw_err)
-    assert held > 0  # objects dropped out of the current frame are still there
-    with pytest.raises(ConfigError, match="window must be >= 1"):
-        clip.tracked_detections(5, 0)
-    assert clip.frame_scene(20, track_window=8).tags["track_window"] == 8
-    for other in eval_clips:  # filtered frames are valid scenes with a free target (folded outlines fall back)
-        for frame in range(0, other.n_frames, 4):
-            other.frame_scene(frame, track_window=5)
 
 
 def test_dropouts_and_missed_frames_hold_the_last_detections(eval_clips):
@@ -311,3 +282,38 @@ def test_cli_summary_and_figure(tmp_path, capsys):
     assert "50 boundary edges" in printed and "eval: 47 clips" in printed and "rejected" in printed
     assert out["eval"]["difficult"] == 47
     assert (tmp_path / "clip.png").stat().st_size > 10_000
+
+
+def test_a_pushed_cart_stops_and_a_pedestrian_turns_back_at_the_path_ends():
+    travelled = np.array([0.0, 2.0, 4.0, 6.0, 9.0, 13.0])
+    a, phi, length = np.array([1.0, 2.0]), math.pi / 2, 4.0  # a path from (1, 2) straight up to (1, 6)
+    cart = mover_poses("cart", a, phi, length, travelled)
+    np.testing.assert_allclose(cart[:, :2], [[1, 2], [1, 4], [1, 6], [1, 6], [1, 6], [1, 6]], atol=1e-3)
+    np.testing.assert_allclose(cart[:, 2], math.pi / 2, atol=1e-4)
+    walker = mover_poses("pedestrian", a, phi, length, travelled)
+    # up 4 m, back down 4 m, up again: 6 m walked is 2 m back down, 9 m is 1 m up again, 13 m is 3 m down
+    np.testing.assert_allclose(walker[:, :2], [[1, 2], [1, 4], [1, 6], [1, 4], [1, 3], [1, 5]], atol=1e-3)
+    np.testing.assert_allclose(np.sin(walker[:, 2]), [1, 1, 1, -1, 1, -1], atol=1e-4)
+
+
+def test_movers_of_generated_clips_follow_their_straight_paths(eval_clips):
+    config = clips_module.ClipConfig()
+    for clip in eval_clips[::5]:
+        for obj in (o for o in clip.objects if o.moving):
+            xy = obj.poses[:, :2]
+            speed = np.hypot(*np.diff(xy, axis=0).T).max() / clip.frame_dt_s
+            lo, hi = config.cart_speed_range_mps if obj.kind == "cart" else config.pedestrian_speed_range_mps
+            assert lo - 0.02 <= speed <= hi + 0.02, (clip.name, obj.id)  # positions are rounded to the millimetre
+            far = xy[np.argmax(np.hypot(*(xy - xy[0]).T))]
+            line = LineString([xy[0], far])  # a mover's path: from its first pose to its farthest
+            assert max(line.distance(Point(p)) for p in xy) < 2e-3, (clip.name, obj.id)
+
+
+def test_a_frame_scene_takes_given_detections_but_not_with_the_ground_truth(eval_clips):
+    clip = eval_clips[1]
+    ids, polygons = clip.detections(0)
+    given = (ids[:3], polygons[:3])
+    scene = clip.frame_scene(0, detections=given)
+    assert sorted(tuple(o.vertices.ravel()) for o in scene.obstacles) == sorted(tuple(p.ravel()) for p in polygons[:3])
+    with pytest.raises(ConfigError, match="not both"):
+        clip.frame_scene(0, ground_truth=True, detections=given)
