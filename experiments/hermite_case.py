@@ -160,7 +160,7 @@ def run(checkpoint: Path = DEFAULT_CHECKPOINT, start_seed: int = 0, out: Path | 
     """Find the case (on ``scenes``, default the Factorial training split), draw it and write its table."""
     planner = NeuralParkerPlanner.from_checkpoint(checkpoint, benchmark="factorial")
     scenes = load_benchmark("factorial", "train") if scenes is None else scenes
-    starts = UniformStartSampler(scenes)(np.random.default_rng(start_seed), np.arange(len(scenes)))
+    starts = training_starts(scenes, start_seed)
     case = find_case(planner, scenes, starts)
     folder = run_folder("hermite_case", out)
     draw_case(case, folder / "hermite_case.png")
@@ -173,23 +173,33 @@ def run(checkpoint: Path = DEFAULT_CHECKPOINT, start_seed: int = 0, out: Path | 
     return {"folder": folder, "png": folder / "hermite_case.png", "table": table, "case": case}
 
 
-@cli_boundary
-def main(argv=None) -> dict:
-    """Command-line entry point (usage in the module docstring)."""
-    parser = argparse.ArgumentParser(prog="python -m experiments.hermite_case", description=__doc__,
+def case_main(name: str, doc: str, run_case, argv=None) -> dict:
+    """The command line shared by the single-case figures (``experiments.<name>``): ``--checkpoint``,
+    ``--start-seed`` and ``--out``, then ``run_case(checkpoint, start_seed, out)``; prints the table and the PNG."""
+    parser = argparse.ArgumentParser(prog=f"python -m experiments.{name}", description=doc,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--checkpoint", type=existing_file, default=DEFAULT_CHECKPOINT,
                         help=f"NeuralParker checkpoint (default {DEFAULT_CHECKPOINT})")
     parser.add_argument("--start-seed", type=non_negative_int, default=0,
                         help="seed of the one full-range start per training scene (default 0)")
     parser.add_argument("--out", type=fresh_folder,
-                        help="new or empty run folder (default: a fresh results/hermite_case/<timestamp>)")
+                        help=f"new or empty run folder (default: a fresh results/{name}/<timestamp>)")
     args = parser.parse_args(argv)
-    result = run(args.checkpoint, args.start_seed, args.out)
+    result = run_case(args.checkpoint, args.start_seed, args.out)
     print(result["table"])
     print(f"wrote {result['png']}")
     return result
 
+
+def training_starts(scenes: list[Scene], seed: int) -> np.ndarray:
+    """One full-range start per scene (`UniformStartSampler`, generator seeded with ``seed``)."""
+    return UniformStartSampler(scenes)(np.random.default_rng(seed), np.arange(len(scenes)))
+
+
+@cli_boundary
+def main(argv=None) -> dict:
+    """Command-line entry point (usage in the module docstring)."""
+    return case_main("hermite_case", __doc__, run, argv)
 
 if __name__ == "__main__":
     main()

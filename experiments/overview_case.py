@@ -17,7 +17,6 @@ folder.
 
 from __future__ import annotations
 
-import argparse
 import json
 from pathlib import Path
 
@@ -26,16 +25,15 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 
 from experiments.common import run_folder
+from experiments.hermite_case import DEFAULT_CHECKPOINT, case_main, training_starts
 from np_policy.planner import NeuralParkerPlanner
 from np_policy.staged import StagedPlanner
 from np_sim.benchmarks import load_benchmark
-from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int
+from np_sim.cli import cli_boundary
 from np_sim.plan import Plan
 from np_sim.plotting import plot_scene, target_marker
 from np_sim.scene import Scene
-from np_sim.starts import UniformStartSampler
 
-DEFAULT_CHECKPOINT = Path("checkpoints/factorial_np_seed0.pt")
 UNIFIED, STAGED = "Unified NP", "Hybrid A* → NP"
 STAGED_NOTE = ("the staged arm uses NeuralParker downstream; the paper's diagnostic hands over to the adapted HOPE "
                "planner, a row that comes when HOPE is trained")
@@ -95,7 +93,7 @@ def run(checkpoint: Path = DEFAULT_CHECKPOINT, start_seed: int = 0, out: Path | 
     unified = NeuralParkerPlanner.from_checkpoint(checkpoint, benchmark="factorial")
     staged = StagedPlanner(unified)
     scenes = load_benchmark("factorial", "train") if scenes is None else scenes
-    starts = UniformStartSampler(scenes)(np.random.default_rng(start_seed), np.arange(len(scenes)))
+    starts = training_starts(scenes, start_seed)
     scene, start, plans = find_case(unified, staged, scenes, starts)
     folder = run_folder("overview_case", out)
     draw_case(scene, plans, staged.handoff_radius_m, unified.env_config.vehicle, folder / "overview_case.png")
@@ -112,20 +110,7 @@ def run(checkpoint: Path = DEFAULT_CHECKPOINT, start_seed: int = 0, out: Path | 
 @cli_boundary
 def main(argv=None) -> dict:
     """Command-line entry point (usage in the module docstring)."""
-    parser = argparse.ArgumentParser(prog="python -m experiments.overview_case", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--checkpoint", type=existing_file, default=DEFAULT_CHECKPOINT,
-                        help=f"NeuralParker checkpoint driving both arms (default {DEFAULT_CHECKPOINT})")
-    parser.add_argument("--start-seed", type=non_negative_int, default=0,
-                        help="seed of the one full-range start per training scene (default 0)")
-    parser.add_argument("--out", type=fresh_folder,
-                        help="new or empty run folder (default: a fresh results/overview_case/<timestamp>)")
-    args = parser.parse_args(argv)
-    result = run(args.checkpoint, args.start_seed, args.out)
-    print(result["table"])
-    print(f"wrote {result['png']}")
-    return result
-
+    return case_main("overview_case", __doc__, run, argv)
 
 if __name__ == "__main__":
     main()

@@ -1,0 +1,491 @@
+"""The reproduction report: every table and figure of the paper's §V from what is on disk (no training).
+
+``python -m experiments.paper [--out docs/reproduction.md] [--runs checkpoints/runs] [--no-evaluate]``
+
+For each of the paper's simulation tables (``tab:twostage``, ``tab:topology-stress``, ``tab:hermite``,
+``tab:app-controls``) and figures (``fig:sceneexamples``, ``fig:main-comparison``, ``fig:overview``,
+``fig:global-family``, ``fig:hermite-case``) the report has a section with the paper's numbers
+(`experiments.paper_numbers`) beside ours and the seeds each row has. A row's seed counts when its training run
+(the sweep's run folder, `experiments.sweep_plan`) is finished, i.e. its ``metrics.jsonl`` reaches its config's
+epochs, and its frozen-start evaluation records exist in the run folder (``eval_<benchmark>/records.csv``: the
+checkpoint's own connector, `experiments.evaluate`; ``eval_<benchmark>_ensemble/``: the ensemble connector swapped
+in at evaluation only; ``eval_<benchmark>_staged/``: the Hybrid A* → NP planner, `experiments.planners`). A
+finished run without records is evaluated here (``--no-evaluate``: reported as not evaluated); a run that is not
+finished is named with its state ("0 of 3 seeds: not trained yet"), never left out. Success is on the full set,
+L, reversals and Δκ (eq:metrics) on the within-seed common-success cohort of the rows measured, each the mean ±
+sample SD over seeds. Each of the paper's claims gets one verdict (`claim_verdict`). Compute per table: training
+CPU-hours from the runs' ``metrics.jsonl`` epoch times and the evaluation's planning time. Figures are written
+beside the report under ``figures/``; this run's case folders under a fresh ``results/paper/<timestamp>/``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from experiments import hermite_case, overview_case, scenes
+from experiments.common import run_folder
+from experiments.paper_numbers import (CURRICULUM, GLOBAL_FAMILY, HERMITE, HIGHER_IS_BETTER, MAIN_COMPARISON,
+                                       METRIC_NAMES, METRICS, TOPOLOGY_STRESS, TWOSTAGE, PaperTable)
+from experiments.sweep_plan import PAPER_PLAN, RunSpec, active_trainers, expand, run_state
+from np_sim.cli import cli_boundary
+
+SEEDS = (0, 1, 2)
+PATH_METRICS = ("L", "reversals", "delta_kappa")
+
+
+@dataclass(frozen=True)
+class Arm:
+    """One row of our reproduction: a sweep configuration evaluated one way."""
+
+    label: str
+    """The paper's row label."""
+    configuration: str
+    """`experiments.sweep_plan.Configuration.name` whose runs give the checkpoints."""
+    evaluation: str = "own"
+    """'own' (the checkpoint's connector), 'ensemble' (ensemble swapped in at evaluation) or 'staged'."""
+
+
+EVAL_FOLDERS = {"own": "eval_{benchmark}", "ensemble": "eval_{benchmark}_ensemble", "staged": "eval_{benchmark}_staged"}
+"""The evaluation's records folder inside a run folder."""
+
+ARMS = {
+    MAIN_COMPARISON.label: (Arm("NeuralParker", "factorial_np"), Arm("Adapted HOPE", "factorial_hope")),
+    TWOSTAGE.label: (Arm("Unified NP", "factorial_np"), Arm("Hybrid A* → NP", "factorial_np", "staged"),
+                     Arm("Hybrid A* → HOPE", "factorial_hope", "staged")),
+    TOPOLOGY_STRESS.label: tuple(Arm(f"{name} backbone: {rep}", f"topology_{stem}_{key}")
+                                 for name, stem in (("NeuralParker", "np"), ("HOPE-style", "hopestyle"))
+                                 for rep, key in (("none", "none"), ("BEV", "bev"), ("vertices", "vertices"))),
+    HERMITE.label: (Arm("Fixed Hermite", "factorial_np_fixed"),
+                    Arm("Ensemble, eval. only", "factorial_np_fixed", "ensemble"),
+                    Arm("Ensemble, train + eval.", "factorial_np")),
+    CURRICULUM.label: (Arm("No curriculum", "factorial_np_nocurriculum"), Arm("Geodesic curriculum", "factorial_np")),
+}
+"""Our rows of each table (and of the bar figures), labelled as in the paper."""
+GLOBAL_FAMILY_ARMS = ARMS[TOPOLOGY_STRESS.label]
+
+
+@dataclass
+class ArmResult:
+    """The measured seeds of one arm: per-episode records by seed, and why each other seed is missing."""
+
+    arm: Arm
+    records: dict[int, list[dict]] = field(default_factory=dict)
+    missing: dict[int, str] = field(default_factory=dict)
+
+    def seeds_text(self) -> str:
+        """'2 of 3 (seeds 0, 1; seed 2: training, epoch 95 of 240)' or '0 of 3 seeds: not trained yet (…)'."""
+        have = sorted(self.records)
+        if not have:
+            reasons = sorted(set(self.missing.values()))
+            detail = reasons[0] if len(reasons) == 1 else "; ".join(f"seed {s}: {r}" for s, r in self.missing.items())
+            return f"0 of {len(SEEDS)} seeds: {detail}"
+        text = f"{len(have)} of {len(SEEDS)} (seed{'s' if len(have) > 1 else ''} {', '.join(map(str, have))}"
+        return text + "".join(f"; seed {s}: {r}" for s, r in self.missing.items()) + ")"
+
+
+def state_text(run: RunSpec, state) -> str:
+    """A run's state in the report's words (no process ids, so the report only changes when the runs do)."""
+    if state.kind == "not available yet":
+        return f"not available yet ({state.detail})"
+    if state.kind == "not started":
+        return "not trained yet (not started)"
+    if state.kind in ("training now", "interrupted", "started, no snapshot"):
+        word = "training" if state.kind == "training now" else state.kind
+        return f"not trained yet ({word}, epoch {state.epoch} of {run.epochs})"
+    return f"not usable ({state.kind}: {state.detail})"
+
+
+def read_records(path: Path) -> list[dict]:
+    """Per-episode rows of a ``records.csv`` (scene, start_id, success, L, reversals, delta_kappa, plan_time_ms)."""
+    with path.open(newline="") as fh:
+        return [{"key": (row["scene"], int(row["start_id"])), "success": int(row["success"]),
+                 "L": float(row["L"]), "reversals": float(row["reversals"]),
+                 "delta_kappa": float(row["delta_kappa"]), "plan_time_ms": float(row["plan_time_ms"])}
+                for row in csv.DictReader(fh)]
+
+
+def evaluation_argv(arm: Arm, run: RunSpec, folder: Path) -> list[str]:
+    """The experiment CLI that writes ``folder``'s records for ``run``'s selected checkpoint (``best.pt``)."""
+    checkpoint, benchmark = str(run.run_dir / "best.pt"), run.config.benchmark
+    if arm.evaluation == "staged":
+        return [sys.executable, "-m", "experiments.planners", "--benchmark", benchmark, "--checkpoint", checkpoint,
+                "--methods", "staged_astar_np", "--out", str(folder)]
+    argv = [sys.executable, "-m", "experiments.evaluate", "--benchmark", benchmark, "--checkpoints", checkpoint,
+            "--out", str(folder)]
+    return argv + (["--connector", "ensemble"] if arm.evaluation == "ensemble" else [])
+
+
+def epoch_hours(metrics: Path) -> float:
+    """Wall-clock hours of a run's epochs: each row's ``epoch_s``, or its steps over ``steps_per_s`` in older
+    rows (the same quantity, `np_policy.train`)."""
+    if not metrics.exists():
+        return 0.0
+    seconds, steps = 0.0, 0
+    for line in metrics.read_text(errors="replace").splitlines():
+        try:
+            row = json.loads(line)
+            done = int(row["env_steps"])
+            seconds += float(row["epoch_s"]) if "epoch_s" in row else (done - steps) / float(row["steps_per_s"])
+            steps = done
+        except (ValueError, KeyError, TypeError, ZeroDivisionError):
+            continue
+    return seconds / 3600.0
+
+
+def measure(arm: Arm, runs: dict, episodes: int, evaluate: bool, active: dict) -> ArmResult:
+    """Records of every finished seed of ``arm`` (evaluating a finished run that has none when ``evaluate``)."""
+    result = ArmResult(arm)
+    for seed in SEEDS:
+        run = runs[(arm.configuration, seed)]
+        state = run_state(run, active)
+        if state.kind != "finished":
+            result.missing[seed] = state_text(run, state)
+            continue
+        folder = run.run_dir / EVAL_FOLDERS[arm.evaluation].format(benchmark=run.config.benchmark)
+        if not (folder / "records.csv").exists():
+            if folder.exists() and any(folder.iterdir()):
+                result.missing[seed] = f"trained; {folder} holds an interrupted evaluation (remove it to re-run)"
+                continue
+            if not evaluate:
+                result.missing[seed] = "trained, not evaluated yet"
+                continue
+            subprocess.run(evaluation_argv(arm, run, folder), check=True, stdout=subprocess.DEVNULL)
+        rows = read_records(folder / "records.csv")
+        if len(rows) != episodes:
+            result.missing[seed] = f"{folder / 'records.csv'} has {len(rows)} episodes, expected {episodes}"
+            continue
+        result.records[seed] = rows
+    return result
+
+
+def summarise(results: list[ArmResult]) -> tuple[dict[str, dict[str, list[float]]], dict[int, int]]:
+    """Per arm label and metric, the per-seed values (success on the full set, path metrics on the within-seed
+    common-success cohort of the arms measured at that seed); and the cohort size per seed."""
+    seeds = sorted({s for r in results for s in r.records})
+    cohorts = {s: set.intersection(*[{row["key"] for row in r.records[s] if row["success"]}
+                                     for r in results if s in r.records]) for s in seeds}
+    stats = {}
+    for r in results:
+        stats[r.arm.label] = {m: [] for m in METRICS}
+        for s in sorted(r.records):
+            rows = r.records[s]
+            stats[r.arm.label]["success"].append(float(np.mean([row["success"] for row in rows])))
+            for m in PATH_METRICS:
+                values = [row[m] for row in rows if row["key"] in cohorts[s]]
+                stats[r.arm.label][m].append(float(np.mean(values)) if values else float("nan"))
+    return stats, {s: len(c) for s, c in cohorts.items()}
+
+
+def fmt(values, digits: int) -> str:
+    """'m ± sd' over seeds (sample SD), 'm' for one seed, '–' for none."""
+    v = np.asarray(values, float)
+    if len(v) == 0:
+        return "–"
+    return f"{v[0]:.{digits}f}" if len(v) == 1 else f"{v.mean():.{digits}f} ± {v.std(ddof=1):.{digits}f}"
+
+
+def compare(better: list[float], worse: list[float], metric: str, kind: str = "better") -> tuple[str, str]:
+    """One metric of a claim: (outcome, text). ``kind='better'``: the first row is claimed better (the paper's
+    arrow); 'similar': claimed equal. The noise is the larger of the two rows' sample SDs over seeds (the paper
+    calls a gap within one seed SD a match); a gap beyond it in the claimed direction agrees, against it
+    disagrees, inside it is within noise ('similar' agrees inside, disagrees beyond). Needs two seeds a row."""
+    a, b = np.asarray(better, float), np.asarray(worse, float)
+    if len(a) < 2 or len(b) < 2:
+        raise ValueError(f"compare: {metric} needs at least two seeds per row, got {len(a)} and {len(b)}")
+    gain = (a.mean() - b.mean()) * (1.0 if HIGHER_IS_BETTER[metric] else -1.0)
+    noise = max(a.std(ddof=1), b.std(ddof=1))
+    if kind == "similar":
+        outcome = "agrees" if abs(gain) <= noise else "disagrees"
+    else:
+        outcome = "within noise" if abs(gain) <= noise else ("agrees" if gain > 0 else "disagrees")
+    return outcome, f"{METRIC_NAMES[metric]} {a.mean() - b.mean():+.3g} (noise {noise:.2g}: {outcome})"
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One of the paper's claims: comparisons (better row, worse row, metrics, kind) within one table."""
+
+    text: str
+    table: str
+    comparisons: tuple[tuple[str, str, tuple[str, ...], str], ...]
+
+
+CLAIMS = (
+    Claim("The ensemble connector beats the fixed one at evaluation only", HERMITE.label,
+          (("Ensemble, eval. only", "Fixed Hermite", METRICS, "better"),)),
+    Claim("Training with the ensemble is at least as good as swapping it in at evaluation (train + eval. ≥ "
+          "eval. only)", HERMITE.label, (("Ensemble, train + eval.", "Ensemble, eval. only", METRICS, "better"),)),
+    Claim("Target-relative vertices are best within each backbone on Topology-Stress", TOPOLOGY_STRESS.label,
+          tuple((f"{b} backbone: vertices", f"{b} backbone: {other}", METRICS, "better")
+                for b in ("NeuralParker", "HOPE-style") for other in ("none", "BEV"))),
+    Claim("Unified planning has lower path costs than the staged decompositions", TWOSTAGE.label,
+          tuple(("Unified NP", staged, PATH_METRICS, "better")
+                for staged in ("Hybrid A* → NP", "Hybrid A* → HOPE"))),
+    Claim("The geodesic curriculum improves the path metrics at similar success", CURRICULUM.label,
+          (("Geodesic curriculum", "No curriculum", PATH_METRICS, "better"),
+           ("Geodesic curriculum", "No curriculum", ("success",), "similar"))),
+    Claim("NeuralParker is above the adapted HOPE planner on every metric", MAIN_COMPARISON.label,
+          (("NeuralParker", "Adapted HOPE", METRICS, "better"),)),
+)
+"""The paper's claims the report checks (§V-A to §V-D)."""
+
+
+def claim_verdict(claim: Claim, stats: dict[str, dict[str, list[float]]],
+                  seeds_text: dict[str, str] | None = None) -> str:
+    """One line: 'agrees', 'disagrees' or 'within noise', with the per-metric gaps; a comparison one of whose rows
+    has fewer than two seeds makes it 'not measurable yet (missing: …)', followed by the verdict of the comparisons
+    that are measured, if any. Over several metrics and comparisons: any disagreement makes it 'disagrees', all
+    agreeing 'agrees', anything else 'within noise'."""
+    seeds_text = seeds_text or {}
+
+    def short(label: str) -> bool:
+        """The row has fewer than two seeds."""
+        return len(stats.get(label, {}).get("success", [])) < 2
+
+    missing = [label for label in dict.fromkeys(x for c in claim.comparisons for x in c[:2]) if short(label)]
+    outcomes, texts = [], []
+    for better, worse, metrics, kind in claim.comparisons:
+        if short(better) or short(worse):
+            continue
+        parts = [compare(stats[better][m], stats[worse][m], m, kind) for m in metrics]
+        outcomes += [o for o, _ in parts]
+        texts.append(f"{better} vs {worse}: " + ", ".join(t for _, t in parts))
+    verdict = ("disagrees" if "disagrees" in outcomes else "agrees" if set(outcomes) == {"agrees"}
+               else "within noise")
+    measured = f"{verdict} ({'; '.join(texts)})" if texts else ""
+    if not missing:
+        return measured
+    gap = "not measurable yet (missing: " + "; ".join(
+        f"{label}: {seeds_text.get(label, 'fewer than 2 seeds')}" for label in missing) + ")"
+    return f"{gap}; measured so far: {measured}" if texts else gap
+
+
+DIGITS = {"success": 3, "L": 2, "reversals": 2, "delta_kappa": 2}
+FIGURE_FILES = {"fig:sceneexamples": "scene_examples.png", "fig:main-comparison": "main_comparison.png",
+                "fig:overview": "overview_case.png", "fig:global-family": "global_family.png",
+                "fig:hermite-case": "hermite_case.png"}
+
+
+def table_lines(paper: PaperTable, results: list[ArmResult], stats, cohorts: dict[int, int]) -> list[str]:
+    """The side-by-side table (paper | ours per metric) and the cohort line."""
+    printed = {row.label: row for row in paper.rows}
+    head = " | ".join(f"{METRIC_NAMES[m]} paper | ours" for m in METRICS)
+    lines = [f"| Row | Seeds | {head} |", "|---" * (2 + 2 * len(METRICS)) + "|"]
+    for r in results:
+        cells = []
+        for m in METRICS:
+            mean_sd = printed[r.arm.label].values[m] if r.arm.label in printed else None
+            cells += ["–" if mean_sd is None else f"{mean_sd[0]:.{DIGITS[m]}f} ± {mean_sd[1]:.{DIGITS[m]}f}",
+                      fmt(stats[r.arm.label][m], DIGITS[m])]
+        lines.append(f"| {r.arm.label} | {r.seeds_text()} | " + " | ".join(cells) + " |")
+    ours = "/".join(str(cohorts[s]) for s in sorted(cohorts))
+    theirs = "/".join(map(str, paper.cohort)) or "not printed"
+    lines += ["", f"Success uses all {paper.episodes_per_seed} episodes per seed; L, Rev. and Δκ the within-seed "
+                  f"common-success cohort of the rows measured: n = {ours or '–'}"
+                  f"{' (seeds ' + '/'.join(map(str, sorted(cohorts))) + ')' if cohorts else ''}. The paper's "
+                  f"cohort, over all its rows: n = {theirs}. Rows not measured yet would shrink our cohort."]
+    return lines
+
+
+def training_hours(configurations, runs: dict) -> float:
+    """Wall-clock hours of every epoch the runs of ``configurations`` have trained so far (all seeds)."""
+    return sum(epoch_hours(runs[(c, s)].run_dir / "metrics.jsonl") for c in configurations for s in SEEDS)
+
+
+def compute_line(results: list[ArmResult], runs: dict) -> str:
+    """Training CPU-hours (epoch wall times × this machine's cores, which torch uses) and planning CPU-hours."""
+    cores = os.cpu_count() or 1
+    hours = training_hours(dict.fromkeys(r.arm.configuration for r in results), runs)
+    planning = sum(row["plan_time_ms"] for r in results for rows in r.records.values() for row in rows) / 6e4
+    return (f"Compute: training {hours:.1f} h wall-clock so far ({hours * cores:.1f} CPU-h on this {cores}-core "
+            f"machine, from the runs' `metrics.jsonl` epoch times; runs shared with other tables are counted in "
+            f"each), evaluation {planning:.1f} CPU-min of planning (sum of the records' plan times).")
+
+
+def bar_figure(groups: dict[str, dict[str, list[float]]], metrics, png: Path, title: str) -> bool:
+    """Bars of the seed mean with sample-SD error bars and each seed as an open circle, one panel per metric,
+    one bar per row; False (and no file) when no row has a seed."""
+    groups = {label: values for label, values in groups.items() if any(len(values.get(m, ())) for m in metrics)}
+    if not groups:
+        return False
+    figure = Figure(figsize=(3.2 * len(metrics), 3.6), layout="constrained")
+    for ax, m in zip(figure.subplots(1, len(metrics), squeeze=False)[0], metrics):
+        for x, (label, values) in enumerate(groups.items()):
+            v = np.asarray(values.get(m, ()), float)
+            if not len(v):
+                continue
+            ax.bar(x, v.mean(), yerr=v.std(ddof=1) if len(v) > 1 else 0.0, capsize=4, color=f"C{x}", alpha=0.8)
+            ax.plot(np.full(len(v), x), v, "o", mfc="none", color="black")
+        ax.set_xticks(range(len(groups)), list(groups), rotation=20, ha="right", fontsize="small")
+        ax.set_title(METRIC_NAMES.get(m, m))
+    figure.suptitle(title)
+    figure.savefig(png, dpi=110)
+    return True
+
+
+def family_success(results: list[ArmResult]) -> dict[str, dict[str, list[float]]]:
+    """Per arm, per route-choice family (scene name field 'typeN'), the per-seed success (Fig. 5)."""
+    out = {}
+    for r in results:
+        families = sorted({key[0].split("-")[2] for rows in r.records.values() for key in (row["key"] for row in rows)})
+        out[r.arm.label] = {f: [float(np.mean([row["success"] for row in rows if row["key"][0].split("-")[2] == f]))
+                                for rows in r.records.values()] for f in families}
+    return out
+
+
+def claim_lines(table_label: str, stats, results: list[ArmResult]) -> list[str]:
+    """The verdict line of every claim made on ``table_label``."""
+    seeds = {r.arm.label: r.seeds_text() for r in results}
+    return [f"- **{c.text}** ({c.table}): {claim_verdict(c, stats, seeds)}" for c in CLAIMS if c.table == table_label]
+
+
+def measure_all(runs: dict, evaluate: bool) -> dict[str, list[ArmResult]]:
+    """Every table's arms measured (an arm shared by tables is measured once)."""
+    active, done = active_trainers(), {}
+    tables = {MAIN_COMPARISON.label: MAIN_COMPARISON, TWOSTAGE.label: TWOSTAGE, TOPOLOGY_STRESS.label:
+              TOPOLOGY_STRESS, HERMITE.label: HERMITE, CURRICULUM.label: CURRICULUM}
+    out = {}
+    for label, arms in ARMS.items():
+        out[label] = []
+        for arm in arms:
+            if arm not in done:
+                done[arm] = measure(arm, runs, tables[label].episodes_per_seed, evaluate, active)
+            out[label].append(done[arm])
+    return out
+
+
+def table_section(paper: PaperTable, results: list[ArmResult], runs: dict) -> list[str]:
+    """A table's section: the side-by-side table, its claims and its compute."""
+    stats, cohorts = summarise(results)
+    return [f"## {paper.number} (`{paper.label}`): {paper.title}", "", *table_lines(paper, results, stats, cohorts),
+            "", *claim_lines(paper.label, stats, results), "", compute_line(results, runs), ""]
+
+
+def case_sections(work: Path, figures: Path) -> dict[str, list[str]]:
+    """Figs. 2, 4 and 6: run the case modules into ``work`` and copy their PNGs to ``figures``."""
+    made = {"fig:sceneexamples": scenes.run(out=work / "scenes"),
+            "fig:overview": overview_case.run(out=work / "overview_case"),
+            "fig:hermite-case": hermite_case.run(out=work / "hermite_case")}
+    for label, result in made.items():
+        shutil.copyfile(result["png"], figures / FIGURE_FILES[label])
+    grid = made["fig:sceneexamples"]["scenes"]
+    return {
+        "fig:sceneexamples": [
+            "## Fig. 2 (`fig:sceneexamples`): representative held-out scenes", "",
+            f"![scene examples](figures/{FIGURE_FILES['fig:sceneexamples']})", "",
+            "Factorial (rows: near, medium, long; columns: reverse, lateral, random; hard difficulty): "
+            + ", ".join(f"`{n}`" for row in grid["factorial"] for n in row) + ". Topology-Stress (rows: Types 1–3; "
+            "columns: medium, hard): " + ", ".join(f"`{n}`" for row in grid["topology"] for n in row) + ".",
+            "", "`python -m experiments.scenes`", ""],
+        "fig:overview": [
+            "## Fig. 4 (`fig:overview`): unified versus staged planning on one pinned case", "",
+            f"![overview case](figures/{FIGURE_FILES['fig:overview']})", "", made["fig:overview"]["table"], "",
+            "The paper pins a Topology-Stress pocket case (Type 2) driven by the Topology-Stress vertices policy; that "
+            "policy is not trained yet, so the case is pinned on a Factorial training scene with the shipped Factorial "
+            "checkpoint (rule in `experiments.overview_case`). `python -m experiments.overview_case`", ""],
+        "fig:hermite-case": [
+            "## Fig. 6 (`fig:hermite-case`): both connectors from one shared hand-off", "",
+            f"![hermite case](figures/{FIGURE_FILES['fig:hermite-case']})", "", made["fig:hermite-case"]["table"], "",
+            "The paper's claim for this figure, that both connectors are feasible from the hand-off and the ensemble "
+            "picks another terminal shape, holds here by construction of the pick (rule in "
+            "`experiments.hermite_case`, on a training scene). `python -m experiments.hermite_case`", ""],
+    }
+
+
+def bar_section(paper: PaperTable, number_title: str, groups, metrics, png: Path, note: str) -> list[str]:
+    """A bar figure's section: the figure when any row is measured, else what is missing."""
+    lines = [f"## {paper.number} (`{paper.label}`): {number_title}", ""]
+    if bar_figure(groups, metrics, png, f"{paper.number}: ours (mean ± sample SD; circles: seeds)"):
+        lines += [f"![{paper.label}](figures/{png.name})", ""]
+    return lines + [note, ""]
+
+
+def status_lines(results: dict[str, list[ArmResult]]) -> list[str]:
+    """One row per arm: which tables it feeds and its seeds."""
+    feeds: dict[Arm, list[str]] = {}
+    by_arm = {}
+    for label, arms in results.items():
+        for r in arms:
+            feeds.setdefault(r.arm, []).append(label)
+            by_arm[r.arm] = r
+    lines = ["| Row (configuration, evaluation) | Feeds | Seeds |", "|---|---|---|"]
+    for arm, r in by_arm.items():
+        lines.append(f"| {arm.label} (`{arm.configuration}`, {arm.evaluation}) | "
+                     f"{', '.join(f'`{t}`' for t in feeds[arm])} | {r.seeds_text()} |")
+    return lines
+
+
+def build_report(runs_root: Path, out_md: Path, evaluate: bool = True) -> str:
+    """Measure every arm, run the case figures and write the report to ``out_md`` (figures beside it)."""
+    runs = {(r.config.name, r.seed): r for r in expand(PAPER_PLAN, SEEDS, runs_root)}
+    figures = out_md.parent / "figures"
+    figures.mkdir(parents=True, exist_ok=True)
+    results = measure_all(runs, evaluate)
+    cases = case_sections(run_folder("paper", None), figures)
+    main = results[MAIN_COMPARISON.label]
+    main_stats, main_cohorts = summarise(main)
+    topo = results[TOPOLOGY_STRESS.label]
+    lines = ["# Reproduction report", "",
+             "Generated by `python -m experiments.paper` from the run folders under `checkpoints/runs/` (no "
+             "training): the paper's printed numbers beside ours, the seeds each row has, and a verdict on each of "
+             "the paper's claims. Ours: three-seed mean ± sample SD where seeds exist (one seed: its value); "
+             "success on the full set of frozen test starts, path metrics on the within-seed common-success cohort "
+             "of the rows measured. A claim is checked only when every row it compares has at least two seeds; a "
+             "gap within the larger seed SD of the two rows is 'within noise'. Which runs are still missing and "
+             "how to train them: [sweep.md](sweep.md).", "", "## Rows and their seeds", "", *status_lines(results),
+             "", "## Claims", ""]
+    claims_stats = {label: summarise(arms)[0] for label, arms in results.items()}
+    for label in ARMS:
+        lines += claim_lines(label, claims_stats[label], results[label])
+    lines += ["", *cases["fig:sceneexamples"]]
+    lines += bar_section(MAIN_COMPARISON, "NeuralParker versus the adapted HOPE planner",
+                         {r.arm.label: main_stats[r.arm.label] for r in main}, METRICS,
+                         figures / FIGURE_FILES[MAIN_COMPARISON.label],
+                         "The paper draws this comparison as bars only (pairwise cohort n = "
+                         f"{'/'.join(map(str, MAIN_COMPARISON.cohort))}). Ours:")
+    lines += [*table_lines(MAIN_COMPARISON, main, main_stats, main_cohorts), "",
+              *claim_lines(MAIN_COMPARISON.label, main_stats, main), ""]
+    lines += table_section(TWOSTAGE, results[TWOSTAGE.label], runs) + cases["fig:overview"]
+    lines += table_section(TOPOLOGY_STRESS, topo, runs)
+    lines += bar_section(GLOBAL_FAMILY, "family-level success on Topology-Stress", family_success(topo),
+                         ("type1", "type2", "type3"), figures / FIGURE_FILES[GLOBAL_FAMILY.label],
+                         "The paper draws per-family success (240 episodes per family and seed) as bars only. "
+                         + ("" if any(r.records for r in topo) else "Not measurable yet: no Topology-Stress row "
+                            "has a seed (" + "; ".join(f"{r.arm.label}: {r.seeds_text()}" for r in topo) + ")."))
+    lines += table_section(HERMITE, results[HERMITE.label], runs) + cases["fig:hermite-case"]
+    lines += table_section(CURRICULUM, results[CURRICULUM.label], runs)
+    text = "\n".join(lines).rstrip() + "\n"
+    out_md.write_text(text)
+    return text
+
+
+@cli_boundary
+def main(argv=None) -> str:
+    """Command-line entry point (usage in the module docstring)."""
+    parser = argparse.ArgumentParser(prog="python -m experiments.paper", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=Path, default=Path("docs/reproduction.md"),
+                        help="the report (Markdown; default docs/reproduction.md; figures go to figures/ beside it)")
+    parser.add_argument("--runs", type=Path, default=Path("checkpoints/runs"),
+                        help="run root of the sweep (default checkpoints/runs)")
+    parser.add_argument("--no-evaluate", action="store_true",
+                        help="do not evaluate finished runs that have no records; report them as not evaluated")
+    args = parser.parse_args(argv)
+    text = build_report(args.runs, args.out, evaluate=not args.no_evaluate)
+    print(f"wrote {args.out}")
+    return text
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,182 @@
+"""The reproduction report and its figure modules: the paper's numbers against the LaTeX source, claim verdicts and
+cohort aggregation against hand-made numbers, run folders read into seeds, and each figure module on a tiny input."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from shapely.geometry import Point
+
+from experiments import hermite_case, overview_case, scenes
+from experiments.paper import (ARMS, CLAIMS, Arm, ArmResult, Claim, claim_verdict, compare, epoch_hours, measure,
+                               summarise)
+from experiments.paper_numbers import METRICS, TABLES
+from experiments.sweep_plan import PAPER_PLAN, expand
+from np_sim.benchmarks import load_benchmark
+
+PAPER = Path(__file__).resolve().parents[3] / "shared" / "paper" / "neuralparker.tex"
+CHECKPOINT = Path("checkpoints/factorial_np_seed0.pt")
+needs_checkpoint = pytest.mark.skipif(not CHECKPOINT.exists(), reason="no shipped NeuralParker checkpoint")
+
+
+def _latex_table(label: str) -> str:
+    text = PAPER.read_text()
+    end = text.index(f"\\label{{{label}}}")
+    start = text.rindex("\\begin{table}", 0, end)
+    return text[start:text.index("\\end{table}", end)]
+
+
+@pytest.mark.skipif(not PAPER.exists(), reason="the paper's LaTeX source is not in this checkout (../shared)")
+@pytest.mark.parametrize("table", TABLES, ids=lambda t: t.label)
+def test_transcribed_numbers_match_the_latex_tables(table):
+    source = _latex_table(table.label)
+    printed = [(float(m), float(s)) for m, s in re.findall(r"\\msd\{([\d.]+)\}\{([\d.]+)\}", source)]
+    ours = [row.values[m] for row in table.rows for m in METRICS]
+    assert ours == printed
+    cohort = re.search(r"\(\$n=([\d/]+)\$\)", source).group(1)
+    assert table.cohort == tuple(int(n) for n in cohort.split("/"))
+
+
+def test_every_claim_names_rows_of_its_table():
+    for claim in CLAIMS:
+        labels = {arm.label for arm in ARMS[claim.table]}
+        for better, worse, _, _ in claim.comparisons:
+            assert {better, worse} <= labels, claim.text
+
+
+def test_compare_against_hand_computed_gaps():
+    # L lower is better: means 18.1 and 20.2, sample SDs 0.1414 and 0.2828, gap 2.1 beyond 0.2828
+    outcome, text = compare([18.0, 18.2], [20.0, 20.4], "L")
+    assert outcome == "agrees" and "-2.1" in text and "0.28" in text
+    assert compare([20.0, 20.4], [18.0, 18.2], "L")[0] == "disagrees"
+    # success higher is better: means 0.97 and 0.96, gap 0.01 inside the larger SD 0.0283
+    assert compare([0.95, 0.99], [0.96, 0.96], "success")[0] == "within noise"
+    assert compare([0.95, 0.99], [0.96, 0.96], "success", "similar")[0] == "agrees"
+    assert compare([0.97, 0.98], [0.80, 0.81], "success", "similar")[0] == "disagrees"
+    with pytest.raises(ValueError, match="two seeds"):
+        compare([0.9], [0.8, 0.7], "success")
+
+
+def test_claim_verdict_combines_metrics_and_names_missing_rows():
+    claim = Claim("A beats B and C", "t", (("A", "B", ("success", "L"), "better"), ("A", "C", ("L",), "better")))
+    stats = {"A": {"success": [0.99, 0.98], "L": [18.0, 18.2]},
+             "B": {"success": [0.90, 0.91], "L": [20.0, 20.4]},
+             "C": {"success": [0.95, 0.96], "L": [18.1, 18.3]}}
+    assert claim_verdict(claim, stats).startswith("within noise (A vs B: ")  # A vs C: L gap 0.1 < SD 0.14
+    stats["C"]["L"] = [17.0, 17.1]
+    assert claim_verdict(claim, stats).startswith("disagrees")
+    stats["C"]["L"] = [25.0, 25.2]
+    assert claim_verdict(claim, stats).startswith("agrees")
+    del stats["C"]
+    line = claim_verdict(claim, stats, {"C": "0 of 3 seeds: not trained yet (not started)"})
+    assert line.startswith("not measurable yet (missing: C: 0 of 3 seeds: not trained yet (not started)); "
+                           "measured so far: agrees (A vs B")
+    stats["B"] = {"success": [0.9], "L": [20.0]}
+    assert claim_verdict(claim, stats) == "not measurable yet (missing: B: fewer than 2 seeds; C: fewer than 2 seeds)"
+
+
+def _rows(outcomes):
+    return [{"key": ("s", j), "success": int(ok), "L": length, "reversals": 1.0, "delta_kappa": 0.5,
+             "plan_time_ms": 2.0} for j, (ok, length) in enumerate(outcomes)]
+
+
+def test_summarise_uses_full_set_success_and_the_within_seed_common_cohort():
+    nan = float("nan")
+    a = ArmResult(Arm("A", "x"), {0: _rows([(1, 10.0), (1, 20.0), (0, nan)]),
+                                  1: _rows([(1, 11.0), (1, 21.0), (1, 5.0)])})
+    b = ArmResult(Arm("B", "y"), {0: _rows([(1, 12.0), (0, nan), (1, 30.0)]),
+                                  1: _rows([(1, 13.0), (1, 23.0), (0, nan)])})
+    stats, cohorts = summarise([a, b])
+    assert cohorts == {0: 1, 1: 2}  # seed 0: only start 0 solved by both; seed 1: starts 0 and 1
+    assert stats["A"]["success"] == pytest.approx([2 / 3, 1.0])
+    assert stats["A"]["L"] == pytest.approx([10.0, 16.0])
+    assert stats["B"]["L"] == pytest.approx([12.0, 18.0])
+
+
+def _metrics(folder: Path, epochs: int, seconds: float, timed_from: int | None = None) -> None:
+    rows = []
+    for e in range(1, epochs + 1):
+        row = {"epoch": e, "env_steps": 65536 * e, "steps_per_s": 65536 / seconds}
+        if timed_from is not None and e >= timed_from:
+            row["epoch_s"] = 2 * seconds  # newer rows carry their own epoch time
+        rows.append(json.dumps(row))
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "metrics.jsonl").write_text("\n".join(rows) + "\n")
+
+
+def test_epoch_hours_reads_both_row_formats(tmp_path):
+    _metrics(tmp_path, 10, 36.0, timed_from=6)
+    assert epoch_hours(tmp_path / "metrics.jsonl") == pytest.approx((5 * 36.0 + 5 * 72.0) / 3600)
+    assert epoch_hours(tmp_path / "absent.jsonl") == 0.0
+
+
+def test_measure_counts_only_finished_evaluated_seeds(tmp_path):
+    runs = {(r.config.name, r.seed): r for r in expand(PAPER_PLAN, (0, 1, 2), tmp_path)}
+    seed0 = tmp_path / "factorial_np_fixed_seed0_lot"
+    _metrics(seed0, 240, 40.0)
+    (seed0 / "best.pt").write_bytes(b"")
+    (seed0 / "eval_factorial").mkdir()
+    (seed0 / "eval_factorial" / "records.csv").write_text(
+        "scene,start_id,success,L,reversals,delta_kappa,plan_time_ms\n"
+        "a,0,1,10.0,1,0.5,3.0\na,1,0,nan,-1,nan,4.0\n")
+    _metrics(tmp_path / "factorial_np_fixed_seed1_lot", 100, 40.0)
+    (tmp_path / "factorial_np_fixed_seed1_lot" / "snapshot.pt").write_bytes(b"")
+    fixed = measure(Arm("Fixed Hermite", "factorial_np_fixed"), runs, 2, evaluate=False, active={})
+    assert sorted(fixed.records) == [0] and fixed.records[0][1]["key"] == ("a", 1)
+    assert fixed.seeds_text() == ("1 of 3 (seed 0; seed 1: not trained yet (interrupted, epoch 100 of 240); "
+                                  "seed 2: not trained yet (not started))")
+    ensemble = measure(Arm("Ensemble, eval. only", "factorial_np_fixed", "ensemble"), runs, 2, False, {})
+    assert ensemble.missing[0] == "trained, not evaluated yet"
+    wrong_size = measure(Arm("Fixed Hermite", "factorial_np_fixed"), runs, 1080, False, {})
+    assert "has 2 episodes, expected 1080" in wrong_size.missing[0]
+    hope = measure(Arm("Adapted HOPE", "factorial_hope"), runs, 1080, False, {})
+    assert hope.seeds_text() == "0 of 3 seeds: not available yet (the adapted HOPE planner is not built yet)"
+
+
+def test_scene_examples_grid_and_png(tmp_path):
+    result = scenes.run("medium", tmp_path / "scenes")
+    assert result["png"].stat().st_size > 0
+    tags = {s.name: s.tags for s in load_benchmark("factorial", "test") + load_benchmark("topology", "test")}
+    for i, row in enumerate(result["scenes"]["factorial"]):
+        for j, name in enumerate(row):
+            assert (tags[name]["distance"], tags[name]["type"], tags[name]["difficulty"]) == \
+                (scenes.DISTANCES[i], scenes.TYPES[j], "medium")
+            assert tags[name]["split"] == "test"
+    assert [[tags[n]["cell"] for n in row] for row in result["scenes"]["topology"]] == \
+        [[f"type{i}-medium", f"type{i}-hard"] for i in (1, 2, 3)]
+    assert json.loads((tmp_path / "scenes" / "scenes.json").read_text())["scenes"] == result["scenes"]
+
+
+@needs_checkpoint
+def test_hermite_case_replays_both_connectors_from_the_handoff(tmp_path):
+    train = load_benchmark("factorial", "train")
+    picked = [s for s in train if s.tags["distance"] == "long" and s.tags["type"] == "random"]
+    result = hermite_case.run(CHECKPOINT, 0, tmp_path / "case", scenes=picked)
+    case = result["case"]
+    assert case.scene.tags["split"] == "train"
+    fixed, ensemble = case.connections["fixed"], case.connections["ensemble"]
+    # both start at the hand-off; the ensemble's 81 include the fixed nine, so its least cost is no higher
+    for c in (fixed, ensemble):
+        assert np.allclose(c.points[0], case.pose[:2], atol=1e-9)
+    assert ensemble.cost < fixed.cost
+    assert fixed.cost == pytest.approx(10 * fixed.delta_kappa + 10 * fixed.length + 5)  # eq:mincost
+    assert fixed.scales == (1.0, 1.0)
+    assert {p.name for p in (tmp_path / "case").iterdir()} == {"hermite_case.png", "case.md", "case.json"}
+
+
+@needs_checkpoint
+def test_overview_case_hands_over_inside_the_radius(tmp_path):
+    train = [s for s in load_benchmark("factorial", "train") if s.tags["cell"] == "long-reverse-easy"]
+    result = overview_case.run(CHECKPOINT, 0, tmp_path / "case", scenes=train)
+    data = json.loads((tmp_path / "case" / "case.json").read_text())
+    scene = next(s for s in train if s.name == data["scene"])
+    target = Point(scene.target[:2])
+    assert target.distance(Point(data["start"][:2])) > 10.0
+    assert all(arm["success"] for arm in data["arms"].values())
+    assert (tmp_path / "case" / "overview_case.png").stat().st_size > 0
+    assert "NeuralParker downstream" in result["table"] and math.isfinite(data["arms"]["Unified NP"]["L"])
