@@ -277,12 +277,14 @@ def _waiting_contacts(ground: ClipWorld, start: np.ndarray, times: np.ndarray, v
 
 
 class ReplanningLoop:
-    """The planner side of a clip run (module docstring): the first plan and its retries at the start, the replan
-    decision at each frame (`replan`, the executor's ``replan`` hook) and stitching.
+    """The planner side of a clip run (SPEC §8 "Closed loop on a clip"; module docstring): the first plan and its
+    retries at the start (`first_plan`), the replan decision at each frame (`replan`, the executor's ``replan``
+    hook) and stitching (`stitched`).
 
     State: ``calls`` (every planner call), ``followed`` (the plan the tracker follows and the vehicle's progress
     along it, None before the first usable plan), ``retry_at_s`` (no planner call before this sim time: set after a
-    failed call) and ``previous_pose`` (the pose of the last replan decision, telling a standing vehicle)."""
+    failed call) and ``previous_pose`` (the pose of the last replan decision, telling a standing vehicle).
+    ``log``: None or the run's `tracking.clip_log.ClipRerunObserver`, given the detections of every call."""
 
     def __init__(self, clip: Clip, planner, config: ClipRunConfig, log=None):
         self.clip, self.planner, self.config, self.log = clip, planner, config, log
