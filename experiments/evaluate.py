@@ -1,14 +1,16 @@
 """Evaluate NeuralParker checkpoints on a benchmark's frozen test starts (paper §III-A protocol, Table I style).
 
-``python -m experiments.evaluate --benchmark factorial --checkpoints a.pt [b.pt c.pt]
+``python -m experiments.evaluate --benchmark factorial --checkpoints a.pt [b.pt c.pt] [--preset paper]
 [--connector fixed|ensemble|centred] [--samples N | --action sample [--action-seed S]] [--out DIR]``
 
 Each checkpoint is one training seed. Every frozen start (1,080 Factorial, 720 Topology-Stress) is planned with
-the deterministic policy and the checkpoint's environment rules (``--connector`` swaps the terminal connector at
-evaluation time only: the paper's "ensemble, evaluation only" row; ``centred`` is the fixed nine tried
-target-aligned first, `np_sim.config.ConnectorConfig.variant`; ``--samples N`` plans with the best of the mean
-rollout and N seeded sampled rollouts, `np_policy.sampling`, beyond the paper; ``--action sample`` plays one
-rollout of sampled actions instead of the mean, as a Tianshou policy acts at test time by default). Success is on
+the checkpoint's environment rules and the NeuralParker preset ``--preset`` (`np_policy.config.PRESETS`; default
+'paper', the deterministic policy); the other flags replace one field of it: ``--connector``
+(``NeuralParkerConfig.connector``) swaps the terminal connector at evaluation time only (the paper's "ensemble,
+evaluation only" row; ``centred`` is the fixed nine tried target-aligned first,
+`np_sim.config.ConnectorConfig.variant`); ``--samples N`` plans with the best of the mean rollout and N seeded
+sampled rollouts (`np_policy.sampling`, beyond the paper); ``--action sample`` plays one rollout of sampled actions
+instead of the mean, as a Tianshou policy acts at test time by default; ``--action-seed`` seeds both. Success is on
 the full set, beside it the exact validity of the planned paths (`np_sim.validate`: the footprint, and the
 reference point, swept continuously; a failure counts as invalid); path length L, reversals and Δκ (eq:metrics)
 on the common-success cohort — here the episodes every
@@ -19,6 +21,7 @@ evaluated seed solved — reported as the mean ± sample SD over seeds; plan tim
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 from pathlib import Path
 from typing import Any
@@ -27,38 +30,43 @@ import numpy as np
 from tqdm import tqdm
 
 from experiments.common import first, git_commit, mean_sd, run_folder, write_records
-from np_policy.planner import ACTIONS, NeuralParkerPlanner
+from np_policy.config import ACTIONS, PAPER, PRESETS, NeuralParkerConfig
+from np_policy.planner import NeuralParkerPlanner
 from np_sim.benchmarks import frozen_starts, load_benchmark
 from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int
 from np_sim.config import CONNECTOR_VARIANTS
 from np_sim.validate import plan_valid
 
 
-def evaluate(benchmark: str, checkpoints: list[Path], connector: str | None = None, out: Path | None = None,
-             limit: int | None = None, progress: bool = True, samples: int = 0, action: str = "mean",
-             action_seed: int = 0) -> dict[str, Any]:
-    """Plan every frozen start with every checkpoint (best of N sampled rollouts with ``samples``; one sampled
-    rollout with ``action='sample'``, its noise seeded by ``action_seed`` and the start); returns the records and
-    the table text."""
+def method_name(config: NeuralParkerConfig) -> str:
+    """The table's name of a NeuralParker planner playing ``config``."""
+    if config.action == "sample":
+        return f"NeuralParker, sampled actions (seed {config.seed})"
+    if not config.samples and not config.rescue:
+        return "NeuralParker"
+    return f"NeuralParker, best of 1 + {config.samples}" + (" + rescue rounds" if config.rescue else "")
+
+
+def evaluate(benchmark: str, checkpoints: list[Path], config: NeuralParkerConfig = PAPER, out: Path | None = None,
+             limit: int | None = None, progress: bool = True) -> dict[str, Any]:
+    """Plan every frozen start with every checkpoint, playing each as ``config`` says (the 'paper' preset: the
+    mean action); returns the records and the table text."""
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
     episodes = first([(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])], limit)
     folder = run_folder("evaluate", out)
     records: list[dict[str, Any]] = []
+    method = method_name(config)
     for seed_index, path in enumerate(checkpoints):
-        planner = NeuralParkerPlanner.from_checkpoint(path, connector, samples=samples, seed=action_seed,
-                                                      action=action, benchmark=benchmark)
-        method = (f"NeuralParker, best of 1 + {samples}" if samples else
-                  f"NeuralParker, sampled actions (seed {action_seed})" if action == "sample" else "NeuralParker")
+        planner = NeuralParkerPlanner.from_checkpoint(path, config, benchmark=benchmark)
         for k, j in tqdm(episodes, desc=f"{Path(path).name}", unit="ep", disable=not progress):
             plan = planner.plan(scenes[k], starts[k, j])
             L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))
-            records.append({"scene": scenes[k].name, "start_id": j,
-                            "method": method,
-                            "connector": connector or planner.config.env.connector.mode, "checkpoint": str(path),
-                            "seed": planner.config.seed, "seed_index": seed_index, "success": int(plan.success),
-                            "reason": plan.reason, "L": L, "reversals": rev, "delta_kappa": dk,
-                            "plan_time_ms": 1e3 * plan.plan_time_s,
+            records.append({"scene": scenes[k].name, "start_id": j, "method": method,
+                            "connector": config.connector or planner.env_config.connector.mode,
+                            "checkpoint": str(path), "seed": planner.policy.train.seed, "seed_index": seed_index,
+                            "success": int(plan.success), "reason": plan.reason, "L": L, "reversals": rev,
+                            "delta_kappa": dk, "plan_time_ms": 1e3 * plan.plan_time_s,
                             "exact_footprint_valid": int(plan_valid(scenes[k], plan, "exact", "footprint")),
                             "exact_ref_point_valid": int(plan_valid(scenes[k], plan, "exact", "reference_point"))})
     table = format_table(records, len(checkpoints))
@@ -66,9 +74,7 @@ def evaluate(benchmark: str, checkpoints: list[Path], connector: str | None = No
     (folder / "table.md").write_text(table + "\n")
     (folder / "config.json").write_text(json.dumps({"benchmark": benchmark,
                                                     "checkpoints": [str(p) for p in checkpoints],
-                                                    "connector": connector, "samples": samples,
-                                                    "action": action, "action_seed": action_seed,
-                                                    "episodes": len(episodes),
+                                                    "neuralparker": config.to_dict(), "episodes": len(episodes),
                                                     "git_commit": git_commit()}, indent=2))
     return {"records": records, "table": table, "folder": folder}
 
@@ -102,26 +108,26 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
     parser.add_argument("--checkpoints", type=existing_file, nargs="+", required=True,
                         help="one checkpoint per seed")
-    parser.add_argument("--connector", choices=CONNECTOR_VARIANTS,
+    parser.add_argument("--preset", choices=sorted(PRESETS), default="paper",
+                        help="how the planner plays the policy (np_policy.config.PRESETS; default paper: the "
+                             "deterministic planner of the paper and SPEC); the flags below replace one field of it")
+    parser.add_argument("--connector", choices=CONNECTOR_VARIANTS, default=None,
                         help="override the terminal connector (centred: the fixed nine, target-aligned first)")
-    parser.add_argument("--samples", type=non_negative_int, default=0, metavar="N",
-                        help="plan with the best of the mean rollout and N seeded sampled rollouts (default 0: the "
-                             "paper's deterministic planner)")
-    parser.add_argument("--action", choices=ACTIONS, default="mean",
-                        help="mean (default): the deterministic planner of the paper and SPEC; sample: one rollout "
-                             "of sampled actions per start, as a Tianshou PPO policy acts at test time by default")
-    parser.add_argument("--action-seed", type=non_negative_int, default=0, metavar="S",
+    parser.add_argument("--samples", type=non_negative_int, default=None, metavar="N",
+                        help="plan with the best of the mean rollout and N seeded sampled rollouts (paper preset: 0)")
+    parser.add_argument("--action", choices=ACTIONS, default=None,
+                        help="mean (paper preset): the deterministic planner; sample: one rollout of sampled actions "
+                             "per start, as a Tianshou PPO policy acts at test time by default")
+    parser.add_argument("--action-seed", type=non_negative_int, default=None, metavar="S",
                         help="noise seed of --action sample (with the start pose) and of --samples' rollouts "
-                             "(default 0)")
+                             "(paper preset: 0)")
     parser.add_argument("--out", type=fresh_folder,
                         help="new or empty run folder (default: a fresh results/evaluate/<timestamp>)")
     parser.add_argument("--limit", type=positive_int, help="only the first N frozen episodes (smoke runs)")
     args = parser.parse_args(argv)
-    if args.action == "sample" and args.samples:
-        parser.error(f"--action sample plays one sampled rollout per start; it does not combine with --samples "
-                     f"{args.samples}")
-    result = evaluate(args.benchmark, args.checkpoints, args.connector, args.out, args.limit, samples=args.samples,
-                      action=args.action, action_seed=args.action_seed)
+    fields = {"connector": args.connector, "samples": args.samples, "action": args.action, "seed": args.action_seed}
+    config = dataclasses.replace(PRESETS[args.preset], **{k: v for k, v in fields.items() if v is not None})
+    result = evaluate(args.benchmark, args.checkpoints, config, args.out, args.limit)
     print(result["table"])
     print(f"records: {result['folder'] / 'records.csv'}")
     return result

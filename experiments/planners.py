@@ -28,59 +28,24 @@ import numpy as np
 from tqdm import tqdm
 
 from experiments.common import first, git_commit, run_folder, write_records
+from experiments.registry import PlannerOptions, build_planners, check_names, label
 from np_sim.benchmarks import frozen_starts, load_benchmark
 from np_sim.cli import cli_boundary, fresh_folder, non_negative_int, positive_int
 from np_sim.planners import HybridAStar
 from np_sim.validate import plan_valid, scoring_rule
 
 METHODS = ("hybrid_astar", "np_guided_astar", "ompl_rrtstar", "neuralparker", "staged_astar_np")
-LABELS = {"hybrid_astar": "Hybrid A*", "np_guided_astar": "NP-Guided A*", "ompl_rrtstar": "OMPL RRT*",
-          "neuralparker": "NeuralParker", "staged_astar_np": "Hybrid A* → NP"}
-LEARNED = {"np_guided_astar", "neuralparker", "staged_astar_np"}
+"""Planners of the table (`experiments.registry`), in its row order."""
 DEFAULT_CHECKPOINT = Path("checkpoints/factorial_np_seed0.pt")
-
-
-def build_planners(methods: list[str], checkpoint: Path | None, convention: str, ompl_seed: int,
-                   benchmark: str | None = None) -> dict[str, Any]:
-    """One planner object per method name (learned ones share one policy; with ``benchmark``, a checkpoint of
-    another observation layout than its scenes need is refused up front)."""
-    unknown = [m for m in methods if m not in METHODS]
-    if unknown:
-        raise ValueError(f"experiments.planners: unknown method(s) {unknown}; expected some of {list(METHODS)}")
-    search = HybridAStar(convention=convention)
-    planners: dict[str, Any] = {}
-    learned = None
-    if LEARNED & set(methods):
-        if checkpoint is None or not Path(checkpoint).exists():
-            raise FileNotFoundError(f"experiments.planners: methods {sorted(LEARNED & set(methods))} need a "
-                                    f"NeuralParker checkpoint; got {checkpoint} (pass --checkpoint PATH)")
-        from np_policy.planner import NeuralParkerPlanner
-        from np_policy.staged import NPGuidedAStar, StagedPlanner
-
-        learned = NeuralParkerPlanner.from_checkpoint(checkpoint, benchmark=benchmark)
-    for method in methods:
-        if method == "hybrid_astar":
-            planners[method] = search
-        elif method == "np_guided_astar":
-            planners[method] = NPGuidedAStar(learned, HybridAStar(search.config, convention))
-        elif method == "ompl_rrtstar":
-            from np_sim.planners.ompl_peer import OmplPeer, OmplPeerConfig
-
-            planners[method] = OmplPeer(OmplPeerConfig(time_budget_s=search.config.time_budget_s, seed=ompl_seed),
-                                        convention)
-        elif method == "neuralparker":
-            planners[method] = learned
-        else:
-            planners[method] = StagedPlanner(learned, HybridAStar(search.config, convention))
-    return planners
 
 
 def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | None = DEFAULT_CHECKPOINT,
         convention: str = "reference_point", out: Path | None = None, limit: int | None = None, ompl_seed: int = 0,
         progress: bool = True) -> dict[str, Any]:
     """Plan every frozen start with every method; returns the records, the table text and the run folder."""
-    methods = list(METHODS if methods is None else methods)
-    planners = build_planners(methods, checkpoint, convention, ompl_seed, benchmark)
+    methods = check_names(METHODS if methods is None else methods, METHODS)
+    options = PlannerOptions(checkpoint=checkpoint, convention=convention, ompl_seed=ompl_seed, benchmark=benchmark)
+    planners = build_planners(methods, options)
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
     episodes = first([(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])], limit)
@@ -90,7 +55,7 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
         for method in methods:
             plan = planners[method].plan(scenes[k], starts[k, j])
             L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))
-            scored = _scored_convention(method, planners, convention)
+            scored = planners[method].convention
             records.append({"scene": scenes[k].name, "start_id": j, "method": method, "seed": ompl_seed,
                             "convention": scored, "success": int(plan.success), "reason": plan.reason, "L": L,
                             "reversals": rev, "delta_kappa": dk, "plan_time_ms": 1e3 * plan.plan_time_s,
@@ -105,15 +70,11 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
     (folder / "config.json").write_text(json.dumps({
         "benchmark": benchmark, "methods": methods, "checkpoint": None if checkpoint is None else str(checkpoint),
         "convention": convention, "episodes": len(episodes), "ompl_seed": ompl_seed,
+        "neuralparker": options.neuralparker.to_dict(),
         "hybrid_astar": {k: v for k, v in vars(planners.get("hybrid_astar", HybridAStar()).config).items()
                          if k != "vehicle"},
         "git_commit": git_commit()}, indent=2, default=str))
     return {"records": records, "table": table, "folder": folder}
-
-
-def _scored_convention(method: str, planners: dict[str, Any], convention: str) -> str:
-    """The convention a method's plans are scored under: NeuralParker's checkpoint's own, else ``convention``."""
-    return planners[method].config.env.collision if method == "neuralparker" else convention
 
 
 def format_table(records: list[dict[str, Any]], methods: list[str]) -> str:
@@ -130,12 +91,12 @@ def format_table(records: list[dict[str, Any]], methods: list[str]) -> str:
                   for key in ("L", "reversals", "delta_kappa")}
         times = np.array([r["plan_time_ms"] for r in rows])
         nodes = np.median([r["expanded_nodes"] for r in rows])
-        lines.append(f"| {LABELS[method]} | {np.mean([r['success'] for r in rows]):.3f} | "
+        lines.append(f"| {label(method)} | {np.mean([r['success'] for r in rows]):.3f} | "
                      f"{np.mean([r['exact_footprint_valid'] for r in rows]):.3f} "
                      f"({np.mean([r['exact_ref_point_valid'] for r in rows]):.3f}) | {metric['L']:.2f} | "
                      f"{metric['reversals']:.2f} | {metric['delta_kappa']:.2f} | {np.median(times):.2f} / "
                      f"{np.percentile(times, 90):.2f} | {nodes:.0f} |")
-    false_claims = {LABELS[m]: sum(r["success"] and not r["scored_valid"] for r in rows)
+    false_claims = {label(m): sum(r["success"] and not r["scored_valid"] for r in rows)
                     for m, rows in by_method.items()}
     lines += ["", "Successes failing the rule they are scored by: "
               + ", ".join(f"{label} {n}" for label, n in false_claims.items()) + "."]

@@ -1,4 +1,4 @@
-"""Closed-loop tracking of planned paths on the benchmark frozen starts (SPEC §8, issue 7).
+"""Closed-loop tracking of planned paths on the benchmark frozen starts (SPEC §8).
 
 ``python -m experiments.track --benchmark factorial --planner hybrid_astar [--convention footprint]
 [--per-scene K] [--limit N] [--controller lqr|stanley|pure_pursuit|all] [--rrd-episodes N] [--no-render]
@@ -28,6 +28,7 @@ import numpy as np
 from tqdm import tqdm
 
 from experiments.common import first, git_commit, run_folder, write_records
+from experiments.registry import PlannerOptions, build_planners, check_names
 from np_sim.benchmarks import frozen_starts, load_benchmark
 from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int
 from np_sim.errors import ConfigError
@@ -35,25 +36,8 @@ from tracking.controllers import CONTROLLERS
 from tracking.executor import execute
 from tracking.validators import validate_plan
 
-PLANNERS = ("hybrid_astar", "neuralparker")
-"""Planners this experiment can run."""
-
-
-def make_planner(name: str, convention: str, checkpoint: Path | None, benchmark: str | None = None):
-    """The planner called ``name`` (imported here, so the experiment loads only what it runs); ``benchmark``
-    names the scenes it will plan (a checkpoint of another observation layout is refused up front)."""
-    if name == "hybrid_astar":
-        from np_sim.planners import HybridAStar
-
-        return HybridAStar(convention=convention)
-    if name == "neuralparker":
-        from np_policy.planner import NeuralParkerPlanner
-
-        if checkpoint is None:
-            raise ConfigError("--planner neuralparker needs --checkpoint PATH (e.g. "
-                              "checkpoints/factorial_np_seed0.pt)")
-        return NeuralParkerPlanner.from_checkpoint(checkpoint, benchmark=benchmark)
-    raise ConfigError(f"--planner: expected one of {PLANNERS}, got {name!r}")
+PLANNERS = ("hybrid_astar", "np_guided_astar", "ompl_rrtstar", "neuralparker", "staged_astar_np")
+"""Planners this experiment can run (`experiments.registry`); the learned ones need ``--checkpoint``."""
 
 
 def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controllers: tuple[str, ...] = ("lqr",),
@@ -67,7 +51,8 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
             raise ConfigError(f"--controller: expected one of {sorted(CONTROLLERS)} or 'all', got {c!r}")
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
-    source = make_planner(planner, convention, checkpoint, benchmark)
+    options = PlannerOptions(checkpoint=checkpoint, convention=convention, benchmark=benchmark)
+    source = build_planners(check_names([planner], PLANNERS), options)[planner]
     per_scene = len(first(range(starts.shape[1]), per_scene, "--per-scene"))
     episodes = first([(k, j) for k in range(len(scenes)) for j in range(per_scene)], limit)
     folder = run_folder("track", out)
@@ -138,7 +123,8 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--convention", choices=["reference_point", "footprint"], default="footprint",
                         help="collision convention the planner plans under (default: footprint)")
     parser.add_argument("--checkpoint", type=existing_file, default=None,
-                        help="NeuralParker checkpoint (--planner neuralparker)")
+                        help="policy checkpoint of the learned planners (neuralparker, np_guided_astar, "
+                             "staged_astar_np)")
     parser.add_argument("--controller", choices=[*CONTROLLERS, "all"], default="lqr",
                         help="lqr, stanley, pure_pursuit or all")
     parser.add_argument("--per-scene", type=positive_int, default=None,

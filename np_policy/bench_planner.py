@@ -1,4 +1,4 @@
-"""Time NeuralParker planning queries on the Factorial frozen test starts (issue 5 speed goal: median ≤ 1 ms).
+"""Time NeuralParker planning queries on the Factorial frozen test starts (speed goal: median ≤ 1 ms).
 
 ``python -m np_policy.bench_planner [--checkpoint checkpoints/factorial_np_seed0.pt] [--episodes N] [--seed S]
 [--samples N] [--json]``
@@ -15,15 +15,18 @@ paper's planner's. Run it on an otherwise idle machine.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import time
 from pathlib import Path
 
 import numpy as np
 
+from np_policy.config import PAPER
 from np_policy.planner import NeuralParkerPlanner
 from np_sim.benchmarks import frozen_starts, load_benchmark
 from np_sim.cli import cli_boundary, non_negative_int, positive_int
+from np_sim.env import ParkingEnv
 
 GOAL_MEDIAN_MS = 1.0
 PAPER_CPP_MS = 0.37
@@ -33,7 +36,8 @@ def measure(checkpoint: str | Path, episodes: int | None = None, seed: int = 0, 
     """Median / p90 plan time (ms), success and arcs per query over ``episodes`` seeded frozen starts (all
     1,080 by default), and the compiled policy's µs per call on the observations those queries saw; ``samples``
     > 0 times the best-of-N planner."""
-    planner = NeuralParkerPlanner.from_checkpoint(checkpoint, samples=samples, benchmark="factorial")
+    config = dataclasses.replace(PAPER, samples=samples)
+    planner = NeuralParkerPlanner.from_checkpoint(checkpoint, config, benchmark="factorial")
     scenes = load_benchmark("factorial", "test")
     starts = frozen_starts("factorial")
     pairs = [(i, j) for i in range(len(scenes)) for j in range(starts.shape[1])]
@@ -48,8 +52,7 @@ def measure(checkpoint: str | Path, episodes: int | None = None, seed: int = 0, 
         times.append(plan.plan_time_s)
         arcs.append(len(plan.arcs))
         success.append(plan.success)
-    env = planner._env(scenes[0])
-    obs, _ = env.reset(options={"start": starts[0, 0]})
+    obs, _ = ParkingEnv(scenes[0], planner.env_config).reset(options={"start": starts[0, 0]})
     calls = 2000
     t0 = time.perf_counter()
     for _ in range(calls):

@@ -19,8 +19,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from np_policy.checkpoint import CheckpointError, check_layout
-from np_sim.config import EnvConfig, config_from_dict
+from np_policy.sampling import FIRST_ARCS, ChoiceWeights
+from np_sim.config import CONNECTOR_VARIANTS, EnvConfig, config_from_dict
 from np_sim.curriculum import CurriculumSchedule
 from np_sim.errors import ConfigError
 from np_sim.site import SITE_OBSERVATION
@@ -322,6 +322,8 @@ def benchmark_defaults(benchmark: str) -> dict[str, Any]:
 
 def checkpoint_config(path: str | Path, payload: dict[str, Any]) -> TrainConfig:
     """The TrainConfig stored in a loaded checkpoint; CheckpointError naming ``path`` when it is not a valid one."""
+    from np_policy.checkpoint import CheckpointError
+
     try:
         return TrainConfig.from_dict(payload["config"])
     except ConfigError as exc:
@@ -338,5 +340,124 @@ def benchmark_layout(benchmark: str) -> dict[str, Any]:
 def check_benchmark_layout(path: str | Path, config: TrainConfig, benchmark: str) -> None:
     """CheckpointError naming ``path`` and both layouts when the checkpoint trained under ``config`` reads another
     observation layout than ``benchmark``'s scenes need (e.g. a site checkpoint for the Factorial scenes)."""
+    from np_policy.checkpoint import check_layout
+
     check_layout(path, dataclasses.asdict(config.env.observation), benchmark_layout(benchmark),
                  f"trained on {config.benchmark!r}", f"benchmark {benchmark!r}")
+
+
+ACTIONS = ("mean", "sample")
+"""How a NeuralParker planner acts: the policy's mean action (the paper's planner, SPEC §7) or one sampled action
+per arc (each arc ``clip(μ(o) + σ·ε, −1, 1)``: what a Tianshou PPO policy plays at test time unless it is built
+with ``deterministic_eval=True``)."""
+
+RescueRound = tuple[int, float, str]
+"""One rescue round: (rollouts, standard-deviation scale, first arc 'policy' or 'uniform')."""
+
+
+def rescue_round(spec) -> RescueRound:
+    """A rescue round as (n, scale, first_arc) from (n, scale[, first_arc]), the first arc 'policy' when left out;
+    ConfigError naming what is wrong otherwise."""
+    spec = tuple(spec)
+    if len(spec) not in (2, 3):
+        raise ConfigError(f"NeuralParkerConfig.rescue: a rescue round is (n, scale[, first_arc]), got {spec!r}")
+    n, scale, first_arc = (*spec, "policy")[:3]
+    if isinstance(n, bool) or int(n) != n or int(n) < 1 or not scale > 0:
+        raise ConfigError(f"NeuralParkerConfig.rescue: rescue rounds must be (n >= 1, scale > 0), got {spec!r}")
+    if first_arc not in FIRST_ARCS:
+        raise ConfigError(f"NeuralParkerConfig.rescue: a rescue round's first arc must be one of {FIRST_ARCS}, "
+                          f"got {spec!r}")
+    return int(n), float(scale), first_arc
+
+
+@dataclass(frozen=True)
+class NeuralParkerConfig:
+    """How a NeuralParker planner plays its policy (``np_policy.planner``); the named presets are ``PRESETS``.
+
+    The mean rollout alone (``samples=0``, no rescue rounds) is the paper's planner. ``samples`` adds that many
+    seeded sampled rollouts and returns the best by ``weights`` (`np_policy.sampling.choose`); each rescue round
+    ``(n, scale, first_arc)`` runs, in order, only while no rollout so far has succeeded (or, with
+    ``rescue_clearance_m``, the chosen plan keeps less clearance than that): ``n`` more rollouts at the policy's
+    standard deviation times ``scale``, their first arc drawn by the policy or uniformly over the action box."""
+
+    connector: str | None = None
+    """Terminal connector: 'fixed', 'ensemble' or 'centred' replaces the checkpoint's
+    (`np_sim.config.ConnectorConfig.variant`; paper §III-E: the 81-candidate ensemble is an evaluation-only swap);
+    None keeps it."""
+    action: str = "mean"
+    """'mean' (the deterministic planner) or 'sample' (one rollout of sampled actions, its noise seeded by
+    ``seed`` and the start pose), ``ACTIONS``."""
+    samples: int = 0
+    """Sampled rollouts beside the mean rollout; the best of all is returned (0 = the mean rollout only)."""
+    rescue: tuple[RescueRound, ...] = ()
+    """Wider rounds after a failure: (rollouts, standard-deviation scale, first arc 'policy' or 'uniform') each."""
+    rescue_clearance_m: float = 0.0
+    """The rescue rounds also run while the chosen plan's clearance level (the ``weights.margins_m`` ladder) is
+    below this (m); 0 = only after a failure."""
+    margin_m: float = 0.0
+    """The rollouts' collision checks use the footprint grown by this on every side (m,
+    `np_sim.vehicle.VehicleSpec.inflated`); the choice's costs and the validation see the real body."""
+    seed: int = 0
+    """Seed of the sampled rollouts (rescue round k: ``seed + 1 + k``) and of ``action='sample'``."""
+    weights: ChoiceWeights = field(default_factory=ChoiceWeights)
+    """How the best plan is chosen (`np_policy.sampling.ChoiceWeights`)."""
+
+    def __post_init__(self) -> None:
+        if self.connector is not None and self.connector not in CONNECTOR_VARIANTS:
+            raise ConfigError(f"NeuralParkerConfig.connector: expected one of {CONNECTOR_VARIANTS} or None, got "
+                              f"{self.connector!r}")
+        if self.action not in ACTIONS:
+            raise ConfigError(f"NeuralParkerConfig.action: expected one of {ACTIONS}, got {self.action!r}")
+        if isinstance(self.samples, bool) or not isinstance(self.samples, int) or self.samples < 0:
+            raise ConfigError(f"NeuralParkerConfig.samples: expected an integer >= 0, got {self.samples!r}")
+        object.__setattr__(self, "rescue", tuple(rescue_round(spec) for spec in self.rescue))
+        if self.action == "sample" and (self.samples or self.rescue):
+            raise ConfigError(f"NeuralParkerConfig.action: 'sample' plays one sampled rollout; it does not combine "
+                              f"with samples ({self.samples}) or rescue rounds ({list(self.rescue)})")
+        for name in ("rescue_clearance_m", "margin_m"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise ConfigError(f"NeuralParkerConfig.{name}: expected a finite number >= 0 m, got {value!r}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise ConfigError(f"NeuralParkerConfig.seed: expected an integer >= 0, got {self.seed!r}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain dict (JSON-safe)."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "NeuralParkerConfig":
+        """Inverse of ``to_dict``; unknown keys and values of the wrong type are a ConfigError."""
+        check_types(cls, data)
+        return config_from_dict(cls, data)
+
+    @classmethod
+    def preset(cls, name: str) -> "NeuralParkerConfig":
+        """The preset called ``name`` (``PRESETS``); ConfigError listing them otherwise."""
+        if name not in PRESETS:
+            raise ConfigError(f"NeuralParkerConfig: expected a preset name, one of {sorted(PRESETS)}, got {name!r}")
+        return PRESETS[name]
+
+
+PAPER = NeuralParkerConfig()
+"""The paper's planner (§III-A, SPEC §7): the policy's mean action rolled out once, the checkpoint's connector."""
+
+FOOTPRINT_BEST_OF_N = NeuralParkerConfig(
+    connector="centred", samples=32, rescue=((128, 2.0, "policy"), (128, 3.0, "policy"), (128, 1.0, "uniform")),
+    rescue_clearance_m=0.2)
+"""The footprint-aware site planner of the closed loop (beyond the paper): the best of the mean rollout and 32
+sampled rollouts by steerability, then drive time, reversal, clearance and terminal-heading cost; three rescue
+rounds (128 rollouts at 2 σ, 128 at 3 σ, 128 with a uniform first arc then 1 σ) while none succeeds or the best
+keeps less than 0.2 m of clearance; the centred connector order.
+
+Tuned on the first 94 difficult **training** clips of the site (``python -m experiments.closed_loop --clips
+--split train-difficult --clips-limit 94 --planners neuralparker_footprint``), never on the held-out clips;
+executed footprint success, standard error about 0.04: mean action only 0.59; best of 16 0.73, of 32 0.81 with a
+length cost and 0.83 with the drive-time cost, of 64 0.78; noise σ × 1.5 0.82, × 0.7 0.78; the centred connector
+order 0.82 (neutral here; chosen from the near-target cycles of three held-out clips, where the paper's order ends
+plans on the edge of the 10° parking tolerance); the two policy rescue rounds 0.86 (256 rollouts each: 0.86); the
+rescue for clearance below 0.2 m 0.89 (0.1 m: 0.91 vs 0.93 with ``--stitch --track-window 5``); the third round
+with uniform first arcs 0.90 (64 rollouts or 2 σ: 0.89). ``docs/planners.md`` has the whole table."""
+
+PRESETS: dict[str, NeuralParkerConfig] = {"paper": PAPER, "footprint_best_of_n": FOOTPRINT_BEST_OF_N}
+"""Named NeuralParker configurations; a variant is ``dataclasses.replace(PRESETS[name], field=value)``."""

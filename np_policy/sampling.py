@@ -1,21 +1,20 @@
-"""Best-of-N NeuralParker: sampled policy rollouts and a cost-based choice among them (beyond the paper).
+"""NeuralParker rollouts, batched, and best-of-N: a cost-based choice among sampled ones (beyond the paper).
 
-The paper's planner plays the policy's mean action (§III-A). A trained policy is a distribution, though: the
-rollouts it would sample during training reach the target from many starts where the mean rollout collides or
-runs out of arcs, and among several successful rollouts some keep more distance from the obstacles than others.
-``SampledRollouts`` runs ``n`` stochastic rollouts from one start in one batched environment (``BatchCore``, one
-compiled step for all of them), each arc drawn as ``clip(μ(o) + σ ⊙ ε, −1, 1)`` with ``μ`` the compiled mean
-action, ``σ = exp(log_std)`` the policy's learned standard deviation and ``ε ~ N(0, I)`` from a generator seeded
-per call, so the same query always gives the same plans; with ``first_arc='uniform'`` each rollout's first arc is
-drawn uniformly over the action box ``[−1, 1]²`` instead (`FIRST_ARCS`). ``choose`` keeps the plans the tracker
-can steer and among them takes the lowest cost: an estimate of the drive time (as a length), a cost per reversal,
-a cost for clearance below a wanted safety margin (the largest margin of a ladder under which the whole sampled
-path keeps the vehicle rectangle inflated by it off every obstacle, `VehicleSpec.inflated`) and one for a terminal
-heading near the edge of the parking tolerance. The weights were set on difficult training clips, never on the held-out
-ones.
+``PolicyRollouts`` runs ``n`` rollouts of a policy from one start in one batched environment (``BatchCore``, one
+compiled step for all of them), with the env's own arcs, checks, heading gate, connector and arc budget, so every
+rollout is a plan the env would accept. With ``std`` zero each arc is the compiled mean action ``μ(o)``: the
+paper's planner (§III-A) is the batch of one. Otherwise each arc is drawn as ``clip(μ(o) + σ ⊙ ε, −1, 1)`` with
+``σ`` the policy's learned standard deviation (or a multiple of it) and ``ε ~ N(0, I)`` from a generator seeded per
+call, so the same query always gives the same plans; with ``first_arc='uniform'`` each rollout's first arc is
+drawn uniformly over the action box ``[−1, 1]²`` instead (`FIRST_ARCS`).
 
-Arcs, checks, the heading gate, the connector and the arc budget are the env's own rules, as in the mean
-rollout; a sampled rollout is a plan the env would accept.
+A trained policy is a distribution: the rollouts it would sample during training reach the target from many
+starts where the mean rollout collides or runs out of arcs, and among several successful rollouts some keep more
+distance from the obstacles than others. ``choose`` keeps the plans the tracker can steer and among them takes the
+lowest cost: an estimate of the drive time (as a length), a cost per reversal, a cost for clearance below a wanted
+safety margin (the largest margin of a ladder under which the whole sampled path keeps the vehicle rectangle
+inflated by it off every obstacle, `VehicleSpec.inflated`) and one for a terminal heading near the edge of the
+parking tolerance. The weights were set on difficult training clips, never on the held-out ones.
 """
 
 from __future__ import annotations
@@ -59,21 +58,23 @@ def end_reason(core: BatchCore, row: int) -> str:
 
 
 FIRST_ARCS = ("policy", "uniform")
-"""How a ``SampledRollouts`` round draws each rollout's first arc: from the policy like every later arc, or
+"""How a ``PolicyRollouts`` batch draws each rollout's first arc: from the policy like every later arc, or
 uniformly over the whole action box (a start the policy steers into a wall still gets every first arc tried)."""
 
 
-class SampledRollouts:
-    """``n`` stochastic rollouts of a policy from one start, batched (module docstring)."""
+class PolicyRollouts:
+    """``n`` rollouts of a policy from one start, batched: mean actions when ``std`` is zero, sampled otherwise
+    (module docstring)."""
 
-    def __init__(self, actor, std: np.ndarray, config: EnvConfig, n: int, seed: int = 0, first_arc: str = "policy"):
+    def __init__(self, actor, std: np.ndarray, config: EnvConfig, n: int = 1, seed: int = 0,
+                 first_arc: str = "policy"):
         if int(n) < 1:
-            raise ValueError(f"SampledRollouts: n must be >= 1 rollout, got {n!r}")
+            raise ValueError(f"PolicyRollouts: n must be >= 1 rollout, got {n!r}")
         if first_arc not in FIRST_ARCS:
-            raise ValueError(f"SampledRollouts: first_arc must be one of {FIRST_ARCS}, got {first_arc!r}")
+            raise ValueError(f"PolicyRollouts: first_arc must be one of {FIRST_ARCS}, got {first_arc!r}")
         std = np.asarray(std, np.float64)
         if std.shape != (2,) or not np.all(np.isfinite(std)) or np.any(std < 0):
-            raise ValueError(f"SampledRollouts: std must be two finite numbers >= 0, got {std.tolist()}")
+            raise ValueError(f"PolicyRollouts: std must be two finite numbers >= 0, got {std.tolist()}")
         self.actor, self.std, self.config, self.n, self.seed = actor, std, config, int(n), int(seed)
         self.first_arc = first_arc
         self._cores: weakref.WeakKeyDictionary[Scene, BatchCore] = weakref.WeakKeyDictionary()
@@ -84,6 +85,15 @@ class SampledRollouts:
             core = BatchCore([scene], self.n, self.config, None)
             self._cores[scene] = core
         return core
+
+    def _actions(self, obs: np.ndarray, rng: np.random.Generator, first: bool) -> np.ndarray:
+        """Normalised actions of the live rollouts' observations ``obs`` (module docstring)."""
+        if first and self.first_arc == "uniform":
+            return rng.uniform(-1.0, 1.0, (len(obs), 2))
+        if not self.std.any():
+            return self.actor.batch(obs)
+        noise = rng.standard_normal((len(obs), 2)) * self.std
+        return np.clip(self.actor.batch(obs) + noise, -1.0, 1.0)
 
     def __call__(self, scene: Scene, start, seed=None) -> list[Plan]:
         """The ``n`` rollouts from ``start`` as plans, successful or not (ConfigError on a start in collision);
@@ -98,15 +108,11 @@ class SampledRollouts:
         plans: list[Plan | None] = [None] * self.n
         alive = np.ones(self.n, bool)
         actions = np.zeros((self.n, 2))
-        uniform_next = self.first_arc == "uniform"
+        first = True
         while alive.any():
             live = np.flatnonzero(alive)
-            if uniform_next:
-                actions[live] = rng.uniform(-1.0, 1.0, (len(live), 2))
-                uniform_next = False
-            else:
-                noise = rng.standard_normal((len(live), 2)) * self.std
-                actions[live] = np.clip(self.actor.batch(core.obs[live]) + noise, -1.0, 1.0)
+            actions[live] = self._actions(core.obs[live], rng, first)
+            first = False
             actions[~alive] = 0.0
             core.step(actions)
             for row in live:

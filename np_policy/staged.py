@@ -37,12 +37,20 @@ class GuidedPlan(Plan):
 class NPGuidedAStar:
     """Hybrid A* guided by one NeuralParker rollout from the query (node cost + weight × distance to it)."""
 
+    name = "np_guided_astar"
+    """Registry key of the planner kind (`np_sim.planners.protocol.Planner`)."""
+
     def __init__(self, learned: NeuralParkerPlanner, search: HybridAStar | None = None, guide_spacing_m: float = 0.5):
         if not guide_spacing_m > 0:
             raise ValueError(f"NPGuidedAStar: guide_spacing_m must be > 0, got {guide_spacing_m!r}")
         self.learned = learned
         self.search = HybridAStar() if search is None else search
         self.guide_spacing_m = guide_spacing_m
+
+    @property
+    def convention(self) -> str:
+        """The search's collision convention: its plans are the search's."""
+        return self.search.convention
 
     def plan(self, scene: Scene, start) -> GuidedPlan:
         """Roll out the policy from ``start``, then search with its path as the guide; time covers both."""
@@ -84,12 +92,20 @@ class StagedPlan(Plan):
 class StagedPlanner:
     """Region-goal Hybrid A* prefix to ``handoff_radius_m`` of the target, then the learned planner."""
 
+    name = "staged_astar_np"
+    """Registry key of the planner kind (`np_sim.planners.protocol.Planner`)."""
+
     def __init__(self, learned: NeuralParkerPlanner, search: HybridAStar | None = None, handoff_radius_m: float = 10.0):
         if not handoff_radius_m > 0:
             raise ValueError(f"StagedPlanner: handoff_radius_m must be > 0, got {handoff_radius_m!r}")
         self.learned = learned
         self.search = HybridAStar() if search is None else search
         self.handoff_radius_m = handoff_radius_m
+
+    @property
+    def convention(self) -> str:
+        """The search's collision convention (the convention the staged plans are scored by)."""
+        return self.search.convention
 
     def plan(self, scene: Scene, start) -> StagedPlan:
         """Prefix to the hand-off state, then the learned plan from there; failure reasons name the stage."""

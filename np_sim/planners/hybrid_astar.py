@@ -132,6 +132,9 @@ class _SceneMaps:
 class HybridAStar:
     """Hybrid A* over the scene's collision convention (see the module docstring)."""
 
+    name = "hybrid_astar"
+    """Registry key (`np_sim.planners.protocol.Planner`); ``convention`` is set per instance."""
+
     def __init__(self, config: HybridAStarConfig | None = None, convention: Convention = "reference_point"):
         if convention not in ("reference_point", "footprint"):
             raise ConfigError(f"HybridAStar: convention must be 'reference_point' or 'footprint', got {convention!r}")

@@ -56,6 +56,9 @@ class OmplPeerConfig:
 class OmplPeer:
     """RRT* (OMPL) on a Reeds–Shepp state space with our state-validity checker; ``plan(scene, start) -> Plan``."""
 
+    name = "ompl_rrtstar"
+    """Registry key (`np_sim.planners.protocol.Planner`); ``convention`` is set per instance."""
+
     def __init__(self, config: OmplPeerConfig | None = None, convention: Convention = "reference_point"):
         if convention not in ("reference_point", "footprint"):
             raise ConfigError(f"OmplPeer: convention must be 'reference_point' or 'footprint', got {convention!r}")

@@ -1,6 +1,5 @@
 """experiments.closed_loop: two site clips end to end, headless, with Hybrid A* and an untrained site policy."""
 
-import argparse
 import csv
 import json
 import re
@@ -8,8 +7,11 @@ import re
 import pytest
 import torch
 
-from experiments.closed_loop import PlannerSettings, _rescue_round, _rescue_text, build_planners, main
+from experiments.closed_loop import SITE_PLANNERS, ClosedLoopConfig, main
+from experiments.overrides import apply_overrides
+from experiments.registry import build_planners
 from np_policy.checkpoint import save_checkpoint
+from np_policy.config import FOOTPRINT_BEST_OF_N, PAPER
 from np_policy.network import ActorCritic
 from np_policy.train import TrainConfig, benchmark_defaults
 
@@ -51,31 +53,36 @@ def test_two_clips_run_end_to_end_and_the_known_feasible_clip_parks(tmp_path, si
     assert json.loads((out / "records.json").read_text())[1]["planner"] == "hybrid_astar"
     assert (out / "table.md").exists() and (out / "closed_loop.rrd").stat().st_size > 0
     assert len(list((out / "rrd").glob("*.rrd"))) == 4
-    assert json.loads((out / "config.json").read_text())["clips"] == [KNOWN_FEASIBLE, "eval-1000009"]
+    config = json.loads((out / "config.json").read_text())
+    assert config["clips"] == [KNOWN_FEASIBLE, "eval-1000009"]
+    assert config["config"]["planner"]["checkpoint"] == str(site_checkpoint)
+    assert ClosedLoopConfig.__dataclass_fields__.keys() == config["config"].keys()
 
 
 def test_a_missing_checkpoint_is_a_clear_error(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_info:
         main(["--clips", "--clips-limit", "1", "--checkpoint", str(tmp_path / "none.pt"), "--out", str(tmp_path)])
     assert exit_info.value.code == 2
-    assert "site NeuralParker checkpoint" in capsys.readouterr().err
+    assert re.search("planner neuralparker: its checkpoint .*none.pt does not exist; pass --checkpoint PATH",
+                     capsys.readouterr().err)
 
 
 def test_a_named_footprint_planner_needs_its_checkpoint(tmp_path, site_checkpoint, capsys):
     with pytest.raises(SystemExit) as exit_info:
         main(["--clips", "--clips-limit", "1", "--planners", "neuralparker_footprint", "--checkpoint",
-              str(site_checkpoint), "--footprint-checkpoint", str(tmp_path / "none_fp.pt"), "--out",
+              str(site_checkpoint), "--set", f"planner.footprint_checkpoint={tmp_path / 'none_fp.pt'}", "--out",
               str(tmp_path / "run")])
     assert exit_info.value.code == 2
-    assert re.search("footprint-aware site checkpoint .*none_fp.pt does not exist", capsys.readouterr().err)
+    assert re.search("planner neuralparker_footprint: its checkpoint .*none_fp.pt does not exist; pass --set "
+                     "planner.footprint_checkpoint=PATH", capsys.readouterr().err)
 
 
 def test_perception_filter_and_search_margin_reach_the_run(tmp_path):
     out = tmp_path / "run"
     main(["--clips", "--clip-names", KNOWN_FEASIBLE, "--planners", "hybrid_astar", "--no-render",
-          "--track-window", "5", "--search-margin", "0.15", "--out", str(out)])
-    config = json.loads((out / "config.json").read_text())
-    assert config["search_margin_m"] == 0.15 and config["clip_run"]["track_window"] == 5
+          "--set", "clip_run.track_window=5", "planner.search_margin_m=0.15", "--out", str(out)])
+    config = json.loads((out / "config.json").read_text())["config"]
+    assert config["planner"]["search_margin_m"] == 0.15 and config["clip_run"]["track_window"] == 5
     row = next(csv.DictReader((out / "records.csv").open()))
     assert row["footprint_success"] == "1", row["detail"]
 
@@ -89,39 +96,63 @@ def test_two_workers_give_the_records_of_one(tmp_path, site_checkpoint):
     assert [[r[k] for k in keys] for r in two] == [[r[k] for k in keys] for r in one]
 
 
-def test_footprint_samples_and_connector_reach_the_planner_and_the_config(tmp_path):
+def test_footprint_preset_fields_reach_the_planner_and_the_config(tmp_path):
     out = tmp_path / "run"
-    main(["--clips", "--clip-names", KNOWN_FEASIBLE, "--planners", "neuralparker_footprint", "--no-render",
-          "--footprint-samples", "4", "--footprint-rescue", "8:2", "6:1:uniform", "--out", str(out)])
-    config = json.loads((out / "config.json").read_text())
-    assert config["footprint_samples"] == 4 and config["footprint_connector"] == "centred"
-    assert config["footprint_rescue"] == [[8, 2.0, "policy"], [6, 1.0, "uniform"]]
+    rescue = 'planner.neuralparker_footprint.rescue=[[8, 2], [6, 1, "uniform"]]'
+    main(["--clips", "--clip-names", KNOWN_FEASIBLE, "--planners", "neuralparker_footprint", "--no-render", "--set",
+          "planner.neuralparker_footprint.samples=4", rescue, "--out", str(out)])
+    config = json.loads((out / "config.json").read_text())["config"]["planner"]["neuralparker_footprint"]
+    assert config["samples"] == 4 and config["connector"] == "centred" and config["rescue_clearance_m"] == 0.2
+    assert config["rescue"] == [[8, 2.0, "policy"], [6, 1.0, "uniform"]]
     table = (out / "table.md").read_text()
     assert "best of its mean rollout and 4 sampled rollouts" in table and "terminal connector: centred" in table
     assert ("When none of them succeeds or the best keeps less than 0.2 m clearance it samples 8 at 2 σ, then 6 "
-            "at 1 σ after a uniform first arc (--footprint-rescue)." in table)
-    assert config["footprint_rescue_clearance_m"] == 0.2
-    default = build_planners(["neuralparker_footprint"], PlannerSettings())["neuralparker_footprint"]
+            "at 1 σ after a uniform first arc (planner.neuralparker_footprint.rescue)." in table)
+
+
+def test_the_default_site_planners_are_the_presets():
+    """The footprint row plays the 'footprint_best_of_n' preset (rescue rounds at 2, 3 and 1 σ of the policy's
+    own standard deviation), the paper-faithful row and NP-Guided A*'s guide the 'paper' preset with the site
+    checkpoint's connector (the paper's order); both searches plan under the footprint convention."""
+    assert SITE_PLANNERS.neuralparker == PAPER and SITE_PLANNERS.neuralparker_footprint == FOOTPRINT_BEST_OF_N
+    planners = build_planners(["neuralparker", "neuralparker_footprint", "np_guided_astar", "hybrid_astar"],
+                              SITE_PLANNERS)
+    default = planners["neuralparker_footprint"]
     assert [(r.n, r.first_arc) for r in default.rescue] == [(128, "policy"), (128, "policy"), (128, "uniform")]
-    assert default.rescue_clearance_m == 0.2
-    off = build_planners(["neuralparker_footprint"], PlannerSettings(footprint_rescue_clearance_m=0.0))
-    assert off["neuralparker_footprint"].rescue_clearance_m == 0.0
     for rounds, scale in zip(default.rescue, (2.0, 3.0, 1.0), strict=True):
         assert rounds.std == pytest.approx(scale * default.sampled.std)
-    with pytest.raises(SystemExit):
-        main(["--clips", "--footprint-rescue", "8", "--out", str(tmp_path / "bad")])
-    for bad in ("8:2:grid", "8:2:uniform:1", "0:1"):
-        with pytest.raises(argparse.ArgumentTypeError, match=f"expected N:SCALE\\[:FIRST\\] .*got '{bad}'"):
-            _rescue_round(bad)
-    assert _rescue_round("8:2") == (8, 2.0, "policy") and _rescue_text((8, 2.0, "policy")) == "8:2"
-    settings = PlannerSettings(footprint_connector="fixed", footprint_samples=0)
-    planner = build_planners(["neuralparker_footprint"], settings)["neuralparker_footprint"]
-    assert planner.config.env.connector.headings_deg == (80.0, 90.0, 100.0)  # the checkpoint's, the paper's order
-    planner = build_planners(["neuralparker_footprint"], PlannerSettings())["neuralparker_footprint"]
-    assert planner.config.env.connector.headings_deg == (90.0, 80.0, 100.0)
-    assert planner.config.env.connector.mode == "fixed"
-    with pytest.raises(ValueError, match="--footprint-samples: expected >= 0"):
-        build_planners(["neuralparker_footprint"], PlannerSettings(footprint_samples=-1))
+    assert default.env_config.connector.headings_deg == (90.0, 80.0, 100.0)
+    assert default.env_config.connector.mode == "fixed"
+    assert planners["neuralparker"].env_config.connector.headings_deg == (80.0, 90.0, 100.0)
+    assert planners["np_guided_astar"].learned.policy is planners["neuralparker"].policy  # loaded once
+    assert {name: p.convention for name, p in planners.items()} == {
+        "neuralparker": "reference_point", "neuralparker_footprint": "footprint", "np_guided_astar": "footprint",
+        "hybrid_astar": "footprint"}
+    assert all(p.name == name for name, p in planners.items() if name != "neuralparker_footprint")
+
+
+def test_set_overrides_any_field_by_its_path_and_names_a_bad_one():
+    config = apply_overrides(ClosedLoopConfig(), ["planner.neuralparker_footprint=paper", "controller=stanley",
+                                                  "planner.neuralparker.connector=ensemble", "clip_names=[\"a\"]",
+                                                  "planner.footprint_checkpoint=x.pt", "clips_limit=null"])
+    assert config.planner.neuralparker_footprint == PAPER and config.controller == "stanley"
+    assert config.planner.neuralparker.connector == "ensemble" and config.clip_names == ("a",)
+    assert str(config.planner.footprint_checkpoint) == "x.pt" and config.clips_limit is None
+    bad = {"planner.neuralparker_footprint.sample=3": r"NeuralParkerConfig: unknown key 'sample'; expected one of "
+                                                      r"\['connector', 'action', 'samples'",
+           "planner.neuralparker_footprint.samples=-1": r"NeuralParkerConfig.samples: expected an integer >= 0",
+           "planner.neuralparker_footprint.samples=2.5": r"NeuralParkerConfig.samples: expected an integer, got 2.5",
+           "planner.neuralparker_footprint=best": r"expected a preset name, one of \['footprint_best_of_n', 'paper'\]",
+           "clip_run=1": r"ClosedLoopConfig.clip_run: a group of settings; set one of its fields",
+           "controller=pid": r"ClosedLoopConfig.controller: expected one of \['lqr', ",
+           "clip_run.replan=never": r"ClipRunConfig.replan: expected one of",
+           "workers.n=2": r"ClosedLoopConfig.workers: a single setting, it has no field 'n'",
+           "samples": r"expected KEY=VALUE"}
+    for item, message in bad.items():
+        with pytest.raises(ValueError, match=re.escape(f"--set {item}: ")):
+            apply_overrides(ClosedLoopConfig(), [item])
+        with pytest.raises(ValueError, match=message):
+            apply_overrides(ClosedLoopConfig(), [item])
 
 
 def test_the_difficult_training_clips_run_by_split(tmp_path, monkeypatch, capsys):
@@ -134,7 +165,7 @@ def test_the_difficult_training_clips_run_by_split(tmp_path, monkeypatch, capsys
     result = main(["--clips", "--split", "train-difficult", "--clips-limit", "1", "--planners", "hybrid_astar",
                    "--no-render", "--out", str(out)])
     config = json.loads((out / "config.json").read_text())
-    assert config["split"] == "train-difficult" and config["clips"] == ["train-0000009"]
+    assert config["config"]["split"] == "train-difficult" and config["clips"] == ["train-0000009"]
     assert [r["clip"] for r in result["records"]] == ["train-0000009"]
     assert "Closed loop on 1 difficult training site clips" in result["table"]
     assert "Paper" not in result["table"]  # the paper's figures are for its held-out clips
@@ -147,9 +178,9 @@ def test_the_difficult_training_clips_run_by_split(tmp_path, monkeypatch, capsys
 
 def test_stitch_flag_reaches_the_clip_runs_config_and_table(tmp_path):
     out = tmp_path / "run"
-    result = main(["--clips", "--clip-names", "eval-1000009", "--planners", "hybrid_astar", "--no-render", "--stitch",
-                   "--out", str(out)])
-    config = json.loads((out / "config.json").read_text())
+    result = main(["--clips", "--clip-names", "eval-1000009", "--planners", "hybrid_astar", "--no-render", "--set",
+                   "clip_run.stitch=true", "--out", str(out)])
+    config = json.loads((out / "config.json").read_text())["config"]
     assert config["clip_run"]["stitch"] is True and config["clip_run"]["stitch_margin_m"] == 0.2
-    assert "Stitched replanning (--stitch)" in result["table"]
+    assert "Stitched replanning (clip_run.stitch)" in result["table"]
     assert result["records"][0]["footprint_success"]

@@ -40,14 +40,17 @@ EXPERIMENTS = {"evaluate": (evaluate.main, ["--checkpoints", str(CHECKPOINT)]),
     ("closed_loop", ["--clips-limit", "-1"], "argument --clips-limit: must be a positive integer, got -1"),
     ("closed_loop", ["--clips-limit", "0"], "argument --clips-limit: must be a positive integer, got 0"),
     ("closed_loop", ["--workers", "0"], "argument --workers: must be a positive integer, got 0"),
-    ("closed_loop", ["--render-clips", "-1"], "argument --render-clips: must be a non-negative integer, got -1"),
-    ("closed_loop", ["--track-window", "0"], "argument --track-window: must be a positive integer, got 0"),
-    ("closed_loop", ["--footprint-samples", "-1"],
-     "argument --footprint-samples: must be a non-negative integer, got -1"),
-    ("closed_loop", ["--search-margin", "-0.1"], "argument --search-margin: must be a non-negative number, got -0.1"),
-    ("closed_loop", ["--footprint-margin", "nan"],
-     "argument --footprint-margin: must be a non-negative number, got 'nan'"),
-    ("closed_loop", ["--controller", "pid"], "argument --controller: invalid choice: 'pid'"),
+    ("closed_loop", ["--set", "render_clips=-1"],
+     "--set render_clips=-1: ClosedLoopConfig.render_clips: expected >= 0"),
+    ("closed_loop", ["--set", "clip_run.track_window=0"],
+     "--set clip_run.track_window=0: ClipRunConfig.track_window: expected >= 1 frame, got 0"),
+    ("closed_loop", ["--set", "planner.neuralparker_footprint.samples=-1"],
+     "NeuralParkerConfig.samples: expected an integer >= 0, got -1"),
+    ("closed_loop", ["--set", "planner.search_margin_m=-0.1"],
+     "PlannerOptions.search_margin_m: expected >= 0 m, got -0.1"),
+    ("closed_loop", ["--set", "planner.neuralparker_footprint.margin_m=NaN"],
+     "NeuralParkerConfig.margin_m: expected a finite number >= 0 m, got nan"),
+    ("closed_loop", ["--set", "controller=pid"], "ClosedLoopConfig.controller: expected one of ['lqr', "),
 ])
 def test_out_of_range_arguments_are_refused_at_parse_time(capsys, tmp_path, experiment, argv, expected):
     main, needed = EXPERIMENTS[experiment]
@@ -83,7 +86,7 @@ def test_a_missing_or_broken_checkpoint_is_one_line(capsys, tmp_path):
 def test_user_errors_found_after_parsing_are_one_line(capsys, tmp_path):
     line = one_error_line(capsys, track.main, ["--planner", "neuralparker", "--limit", "1", "--out",
                                                str(tmp_path / "track")])
-    assert line == "error: --planner neuralparker needs --checkpoint PATH (e.g. checkpoints/factorial_np_seed0.pt)"
+    assert line == "error: planner neuralparker needs a policy checkpoint; pass --checkpoint PATH"
     assert not (tmp_path / "track").exists()
     line = one_error_line(capsys, closed_loop.main, ["--clips", "--clip-names", "nope", "--planners", "hybrid_astar",
                                                      "--out", str(tmp_path / "closed_loop")])
@@ -140,8 +143,9 @@ def test_a_limit_below_one_is_refused_by_the_functions_too(tmp_path):
         evaluate.evaluate("factorial", [CHECKPOINT], out=tmp_path / "evaluate", limit=-2)
     with pytest.raises(ConfigError, match="--per-scene: expected a positive integer"):
         track.track(per_scene=-1, out=tmp_path / "track")
-    with pytest.raises(ConfigError, match="--clips-limit: expected a positive integer"):
-        closed_loop.run(["hybrid_astar"], clips_limit=-1, out=tmp_path / "closed_loop")
+    with pytest.raises(ConfigError, match="ClosedLoopConfig.clips_limit: expected >= 1, got -1"):
+        closed_loop.run(closed_loop.ClosedLoopConfig(planners=("hybrid_astar",), clips_limit=-1),
+                        out=tmp_path / "closed_loop")
     assert not any(tmp_path.iterdir())  # refused before a run folder was made
 
 

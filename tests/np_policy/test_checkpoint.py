@@ -165,7 +165,7 @@ def test_a_site_checkpoint_is_refused_for_factorial_scenes_with_both_layouts_nam
     model = ActorCritic(site.env.observation, site.network)
     path = save_checkpoint(tmp_path / "site.pt", {"model": model.state_dict(), "config": site.to_dict()})
     planner = NeuralParkerPlanner.from_checkpoint(path, benchmark="site")
-    assert planner.config.env.observation == site.env.observation
+    assert planner.env_config.observation == site.env.observation
     with pytest.raises(CheckpointError) as info:
         NeuralParkerPlanner.from_checkpoint(path, benchmark="factorial")
     message = str(info.value)

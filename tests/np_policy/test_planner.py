@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 
 from np_policy.checkpoint import CheckpointError
-from np_policy.planner import NeuralParkerPlanner
+from np_policy.config import FOOTPRINT_BEST_OF_N, PAPER, PRESETS, NeuralParkerConfig
+from np_policy.planner import NeuralParkerPlanner, Policy
 from np_policy.train import TrainConfig, train
+from np_sim.errors import ConfigError
 from np_sim.env import ParkingEnv
 from np_sim.examples import example_scenes
 from np_sim.starts import UniformStartSampler
@@ -34,7 +36,7 @@ def test_plans_replay_exactly_in_the_env(planner):
         for start in sampler(rng, np.full(4, k)):
             plan = planner.plan(scenes[k], start)
             assert plan.arcs.shape[1] == 2 and len(plan.arcs) >= 1 and plan.plan_time_s > 0
-            env = ParkingEnv(scenes[k], planner.config.env)
+            env = ParkingEnv(scenes[k], planner.env_config)
             env.reset(options={"start": start})
             for kappa, length in plan.arcs:
                 _, _, term, trunc, info = env.step(np.array([kappa / 0.68, length / 10.0], np.float32))
@@ -62,7 +64,7 @@ def test_evaluate_cli_writes_records_and_table(planner, tmp_path):
     ckpt = tmp_path / "ckpt.pt"
     from np_policy.checkpoint import save_checkpoint
 
-    save_checkpoint(ckpt, {"model": planner.model.state_dict(), "config": planner.config.to_dict()})
+    save_checkpoint(ckpt, {"model": planner.model.state_dict(), "config": planner.policy.train.to_dict()})
     result = main(["--benchmark", "factorial", "--checkpoints", str(ckpt), str(ckpt), "--connector", "fixed",
                    "--out", str(tmp_path / "eval"), "--limit", "12"])
     rows = list(csv.DictReader((tmp_path / "eval" / "records.csv").open()))
@@ -75,15 +77,15 @@ def test_evaluate_cli_writes_records_and_table(planner, tmp_path):
     best = main(["--benchmark", "factorial", "--checkpoints", str(ckpt), "--connector", "fixed", "--samples", "3",
                  "--out", str(tmp_path / "best"), "--limit", "6"])
     assert "| NeuralParker, best of 1 + 3 (" in best["table"]
-    assert json.loads((tmp_path / "best" / "config.json").read_text())["samples"] == 3
+    assert json.loads((tmp_path / "best" / "config.json").read_text())["neuralparker"]["samples"] == 3
     # the mean rollout is among the candidates, so best-of-N solves every start the mean action solves
     solved = {(r["scene"], int(r["start_id"])) for r in rows[:6] if r["success"] == "1"}
     assert solved <= {(r["scene"], r["start_id"]) for r in best["records"] if r["success"]}
     sampled = main(["--benchmark", "factorial", "--checkpoints", str(ckpt), "--connector", "fixed", "--action",
                     "sample", "--action-seed", "4", "--out", str(tmp_path / "sampled"), "--limit", "6"])
     assert "| NeuralParker, sampled actions (seed 4) (" in sampled["table"]
-    config = json.loads((tmp_path / "sampled" / "config.json").read_text())
-    assert (config["action"], config["action_seed"]) == ("sample", 4)
+    config = json.loads((tmp_path / "sampled" / "config.json").read_text())["neuralparker"]
+    assert (config["action"], config["seed"]) == ("sample", 4)
     with pytest.raises(SystemExit):
         main(["--benchmark", "factorial", "--checkpoints", str(ckpt), "--action", "greedy"])
     with pytest.raises(SystemExit):
@@ -92,19 +94,18 @@ def test_evaluate_cli_writes_records_and_table(planner, tmp_path):
 
 def test_the_connector_can_be_swapped_at_load_and_a_bad_mode_is_named(planner, tmp_path):
     from np_policy.checkpoint import save_checkpoint
-    from np_sim.errors import ConfigError
 
     ckpt = tmp_path / "ckpt.pt"
-    save_checkpoint(ckpt, {"model": planner.model.state_dict(), "config": planner.config.to_dict()})
-    assert planner.config.env.connector.mode == "ensemble"
-    fixed = NeuralParkerPlanner.from_checkpoint(ckpt, "fixed")
-    assert fixed.config.env.connector.mode == "fixed"
-    assert fixed.config.env.connector.n_candidates < planner.config.env.connector.n_candidates
-    centred = NeuralParkerPlanner.from_checkpoint(ckpt, "centred").config.env.connector
+    save_checkpoint(ckpt, {"model": planner.model.state_dict(), "config": planner.policy.train.to_dict()})
+    assert planner.env_config.connector.mode == "ensemble"
+    fixed = NeuralParkerPlanner.from_checkpoint(ckpt, NeuralParkerConfig(connector="fixed"))
+    assert fixed.env_config.connector.mode == "fixed"
+    assert fixed.env_config.connector.n_candidates < planner.env_config.connector.n_candidates
+    centred = NeuralParkerPlanner.from_checkpoint(ckpt, NeuralParkerConfig(connector="centred")).env_config.connector
     assert centred.mode == "fixed" and centred.headings_deg == (90.0, 80.0, 100.0)
-    expected = r"connector: expected one of \('fixed', 'ensemble', 'centred'\), got 'spline'"
+    expected = r"connector: expected one of \('fixed', 'ensemble', 'centred'\) or None, got 'spline'"
     with pytest.raises(ConfigError, match=expected):
-        NeuralParkerPlanner.from_checkpoint(ckpt, "spline")
+        NeuralParkerConfig(connector="spline")
 
 
 def test_a_success_that_breaks_its_rule_is_claimed_as_a_validation_failure(planner, monkeypatch):
@@ -118,8 +119,9 @@ def test_a_success_that_breaks_its_rule_is_claimed_as_a_validation_failure(plann
     triangle = [[4.7417, -1.3138], [5.7286, -1.1508], [5.7343, -1.1904]]
     scene = Scene.from_dict({"boundary": [[-30, -30], [30, -30], [30, 30], [-30, 30]],
                              "obstacles": [{"polygon": triangle}], "target": [20.0, 20.0, 0.0]})
-    env = dataclasses.replace(planner.config.env, collision="footprint")
-    footprint = NeuralParkerPlanner(planner.model, dataclasses.replace(planner.config, env=env))
+    env = dataclasses.replace(planner.env_config, collision="footprint")
+    footprint = NeuralParkerPlanner(Policy(planner.model, dataclasses.replace(planner.policy.train, env=env)))
+    assert footprint.convention == "footprint" and planner.convention == "reference_point"
     clipped = Plan(start=np.zeros(3), arcs=np.array([[0.5, 3.0]]), success=True)
     monkeypatch.setattr(footprint, "_mean_rollout", lambda scene, start: clipped)
     plan = footprint.plan(scene, np.zeros(3))
@@ -127,3 +129,36 @@ def test_a_success_that_breaks_its_rule_is_claimed_as_a_validation_failure(plann
     shorter = dataclasses.replace(clipped, arcs=np.array([[0.5, 0.9]]))
     monkeypatch.setattr(footprint, "_mean_rollout", lambda scene, start: shorter)
     assert footprint.plan(scene, np.zeros(3)).success
+
+
+def test_presets_are_the_documented_recipes_and_round_trip_through_json():
+    """'paper' is the mean rollout with the checkpoint's connector; 'footprint_best_of_n' is the recipe of
+    docs/planners.md (32 samples, rescue rounds 128 at 2 σ, 128 at 3 σ, 128 with uniform first arcs at 1 σ, the
+    rescue for clearance below 0.2 m, the centred connector); every preset survives to_dict → JSON → from_dict."""
+    assert PRESETS == {"paper": PAPER, "footprint_best_of_n": FOOTPRINT_BEST_OF_N}
+    assert (PAPER.action, PAPER.samples, PAPER.rescue, PAPER.connector, PAPER.margin_m) == ("mean", 0, (), None, 0.0)
+    best = FOOTPRINT_BEST_OF_N
+    assert (best.samples, best.connector, best.rescue_clearance_m) == (32, "centred", 0.2)
+    assert best.rescue == ((128, 2.0, "policy"), (128, 3.0, "policy"), (128, 1.0, "uniform"))
+    for name, preset in PRESETS.items():
+        assert NeuralParkerConfig.preset(name) is preset
+        assert NeuralParkerConfig.from_dict(json.loads(json.dumps(preset.to_dict()))) == preset
+    assert NeuralParkerConfig(rescue=((8, 2),)).rescue == ((8, 2.0, "policy"),)
+    with pytest.raises(ConfigError, match=r"expected a preset name, one of \['footprint_best_of_n', 'paper'\]"):
+        NeuralParkerConfig.preset("best")
+    with pytest.raises(ConfigError, match=r"NeuralParkerConfig: unknown key\(s\) \['sample'\]"):
+        NeuralParkerConfig.from_dict({"sample": 3})
+    with pytest.raises(ConfigError, match=r"NeuralParkerConfig.samples: expected an integer, got 2.5"):
+        NeuralParkerConfig.from_dict({"samples": 2.5})
+
+
+def test_a_preset_by_name_builds_the_same_planner_as_its_config(planner, tmp_path):
+    from np_policy.checkpoint import save_checkpoint
+    from np_sim.planners import Planner
+
+    ckpt = tmp_path / "ckpt.pt"
+    save_checkpoint(ckpt, {"model": planner.model.state_dict(), "config": planner.policy.train.to_dict()})
+    by_name = NeuralParkerPlanner.from_checkpoint(ckpt, "footprint_best_of_n")
+    assert by_name.config is FOOTPRINT_BEST_OF_N and isinstance(by_name, Planner)
+    assert by_name.sampled.n == 32 and [r.n for r in by_name.rescue] == [128, 128, 128]
+    assert (by_name.name, by_name.convention) == ("neuralparker", planner.policy.train.env.collision)

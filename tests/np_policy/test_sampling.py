@@ -6,9 +6,11 @@ import math
 import numpy as np
 import pytest
 
+from np_policy.config import NeuralParkerConfig as Config
 from np_policy.planner import NeuralParkerPlanner
-from np_policy.sampling import (ChoiceWeights, SampledRollouts, choose, clearance_level, cost_lower_bound, drive_length,
+from np_policy.sampling import (ChoiceWeights, PolicyRollouts, choose, clearance_level, cost_lower_bound, drive_length,
                                 plan_cost)
+from np_sim.errors import ConfigError
 from np_sim.clips import load_clips
 from np_sim.kinematics import arc_step
 from np_sim.plan import Plan
@@ -28,7 +30,7 @@ def problem():
 
 @pytest.fixture(scope="module")
 def sampled():
-    return NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=16, seed=3)
+    return NeuralParkerPlanner.from_checkpoint(CHECKPOINT, Config(samples=16, seed=3))
 
 
 def test_sampling_finds_a_plan_where_the_mean_rollout_fails_and_is_deterministic(problem, sampled):
@@ -46,7 +48,7 @@ def test_rescue_rounds_run_only_after_a_failure(problem, sampled):
     (16, seed 3), so where the mean rollout fails the two planners return the same plan; where it succeeds the
     rescue planner returns the mean rollout."""
     scene, start = problem
-    rescue = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, seed=2, rescue=((16, 1.0), (8, 3.0)))
+    rescue = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, Config(seed=2, rescue=((16, 1.0), (8, 3.0))))
     plan = rescue.plan(scene, start)
     assert plan.success
     np.testing.assert_array_equal(plan.arcs, sampled.plan(scene, start).arcs)
@@ -58,7 +60,7 @@ def test_rescue_rounds_run_only_after_a_failure(problem, sampled):
     assert mean.success
     np.testing.assert_array_equal(rescue.plan(easy_scene, easy_start).arcs, mean.arcs)
     with pytest.raises(ValueError, match=r"rescue rounds must be \(n >= 1, scale > 0\), got \(16, 0.0\)"):
-        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, rescue=((16, 0.0),))
+        Config(rescue=((16, 0.0),))
 
 
 def test_sampled_rollouts_replay_in_the_arc_kinematics(problem, sampled):
@@ -81,7 +83,7 @@ def test_sampled_rollouts_replay_in_the_arc_kinematics(problem, sampled):
 
 def test_choose_equals_the_brute_force_minimum(problem, sampled):
     scene, start = problem
-    vehicle = sampled.config.env.vehicle
+    vehicle = sampled.env_config.vehicle
     plans = sampled.sampled(scene, start)
     weights = ChoiceWeights()
     costs = [(plan_cost(p, scene, vehicle, weights), i) for i, p in enumerate(plans) if p.success]
@@ -138,8 +140,8 @@ def test_a_plan_steering_beyond_kappa_max_loses_to_any_steerable_plan():
 
 
 def test_bad_settings_are_named():
-    with pytest.raises(ValueError, match="samples must be >= 0"):
-        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=-1)
+    with pytest.raises(ConfigError, match=r"NeuralParkerConfig.samples: expected an integer >= 0, got -1"):
+        Config(samples=-1)
     with pytest.raises(ValueError, match="margins_m"):
         ChoiceWeights(margins_m=(0.1, -0.2))
     with pytest.raises(ValueError, match="reverse_speed_mps: expected > 0"):
@@ -158,17 +160,17 @@ def test_the_steering_check_is_the_trackers():
 def test_a_planning_margin_keeps_the_grown_footprint_clear_and_costs_see_the_real_body():
     clip = next(c for c in load_clips("eval") if c.name == "eval-1000009")
     scene, start = clip.frame_scene(0, pose=clip.start), np.asarray(clip.start, float)
-    planner = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=8, margin_m=0.1)
-    body = NeuralParkerPlanner.from_checkpoint(CHECKPOINT).config.env.vehicle
-    assert planner.body == body and planner.config.env.vehicle == body.inflated(0.1)
+    planner = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, Config(samples=8, margin_m=0.1))
+    body = NeuralParkerPlanner.from_checkpoint(CHECKPOINT).env_config.vehicle
+    assert planner.body == body and planner.env_config.vehicle == body.inflated(0.1)
     plan = planner.plan(scene, start)
     assert plan.success
     from np_sim.collision import path_valid
 
     # the env checks its arcs at its own spacing; at 0.05 m the grown body may graze between those samples
     assert path_valid(scene, plan.sample(0.05)[:, :3], "footprint", body.inflated(0.09))
-    with pytest.raises(ValueError, match="margin must be a finite number >= 0 m"):
-        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, margin_m=-0.1)
+    with pytest.raises(ConfigError, match=r"NeuralParkerConfig.margin_m: expected a finite number >= 0 m, got -0.1"):
+        Config(margin_m=-0.1)
 
 
 def test_sampled_action_planner_draws_its_first_arc_from_the_seeded_gaussian(problem):
@@ -178,43 +180,43 @@ def test_sampled_action_planner_draws_its_first_arc_from_the_seeded_gaussian(pro
     from np_sim.env import ParkingEnv
 
     scene, start = problem
-    planner = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, seed=5, action="sample")
+    planner = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, Config(seed=5, action="sample"))
     plan = planner.plan(scene, start)
     np.testing.assert_array_equal(plan.arcs, planner.plan(scene, start).arcs)
-    obs, _ = ParkingEnv(scene, planner.config.env).reset(options={"start": start})
+    obs, _ = ParkingEnv(scene, planner.env_config).reset(options={"start": start})
     eps = np.random.default_rng(query_seed(5, start)).standard_normal((1, 2))[0]
     std = planner.model.log_std.detach().exp().numpy()
     expected = np.clip(planner.actor(obs) + std * eps, -1.0, 1.0)
-    scale = np.array([planner.config.env.vehicle.kappa_max, planner.config.env.episode.max_length_m])
+    scale = np.array([planner.env_config.vehicle.kappa_max, planner.env_config.episode.max_length_m])
     np.testing.assert_allclose(plan.arcs[0], expected * scale, rtol=1e-9)
     other = start + np.array([0.0, 0.0, 1e-9])
     assert not np.array_equal(query_seed(5, start).generate_state(4), query_seed(5, other).generate_state(4))
     assert not np.array_equal(query_seed(5, start).generate_state(4), query_seed(6, start).generate_state(4))
-    with pytest.raises(ValueError, match=r"action must be one of \('mean', 'sample'\), got 'mode'"):
-        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, action="mode")
-    with pytest.raises(ValueError, match=r"action='sample' plays one sampled rollout; it does not combine"):
-        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, action="sample", samples=4)
+    with pytest.raises(ConfigError, match=r"action: expected one of \('mean', 'sample'\), got 'mode'"):
+        Config(action="mode")
+    with pytest.raises(ConfigError, match=r"action: 'sample' plays one sampled rollout; it does not combine"):
+        Config(action="sample", samples=4)
 
 
 def test_rescue_rounds_also_run_for_a_plan_short_of_the_wanted_clearance(problem):
     """rescue_clearance_m: a successful plan whose clearance level is below it gets the rescue rounds and the
     choice among it and their rollouts; at or above it the rounds do not run and the plan is returned as it is."""
     scene, start = problem
-    base = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=16, seed=3)
+    base = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, Config(samples=16, seed=3))
     plan = base.plan(scene, start)
     assert plan.success
-    level = clearance_level(scene, plan.sample(0.05)[:, :3], base.body, base.weights.margins_m)
+    level = clearance_level(scene, plan.sample(0.05)[:, :3], base.body, base.config.weights.margins_m)
     for threshold, runs in ((level, 0), (level + 0.05, 1)):
-        planner = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=16, seed=3, rescue=((64, 2.0),),
-                                                      rescue_clearance_m=threshold)
+        planner = NeuralParkerPlanner.from_checkpoint(
+            CHECKPOINT, Config(samples=16, seed=3, rescue=((64, 2.0),), rescue_clearance_m=threshold))
         rounds, calls = planner.rescue[0], []
         planner.rescue = [lambda *args: calls.append(args) or rounds(*args)]
         chosen = planner.plan(scene, start)
         assert len(calls) == runs
-        expected = choose([plan, *rounds(scene, start)], scene, base.body, base.weights) if runs else plan
+        expected = choose([plan, *rounds(scene, start)], scene, base.body, base.config.weights) if runs else plan
         np.testing.assert_array_equal(chosen.arcs, expected.arcs)
-    with pytest.raises(ValueError, match=r"rescue_clearance_m must be >= 0 m, got -0.1"):
-        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, rescue_clearance_m=-0.1)
+    with pytest.raises(ConfigError, match=r"rescue_clearance_m: expected a finite number >= 0 m, got -0.1"):
+        Config(rescue_clearance_m=-0.1)
 
 
 def test_a_uniform_first_arc_round_escapes_a_start_the_policy_steers_into_a_wall():
@@ -224,23 +226,57 @@ def test_a_uniform_first_arc_round_escapes_a_start_the_policy_steers_into_a_wall
     clip = next(c for c in load_clips("eval") if c.name == "eval-1000097")
     scene, start = clip.frame_scene(0, pose=clip.start), np.asarray(clip.start, float)
     policy_rounds = ((128, 2.0), (128, 3.0))
-    boxed = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=32, rescue=policy_rounds).plan(scene, start)
+    boxed = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, Config(samples=32, rescue=policy_rounds)).plan(scene,
+                                                                                                           start)
     assert not boxed.success and boxed.reason == "collision"
-    planner = NeuralParkerPlanner.from_checkpoint(CHECKPOINT, samples=32,
-                                                  rescue=(*policy_rounds, (128, 1.0, "uniform")))
+    planner = NeuralParkerPlanner.from_checkpoint(CHECKPOINT,
+                                                  Config(samples=32, rescue=(*policy_rounds, (128, 1.0, "uniform"))))
     escape = planner.rescue[2]
     assert (escape.n, escape.first_arc, escape.seed) == (128, "uniform", 3)
     np.testing.assert_allclose(escape.std, planner.sampled.std)
     plans = escape(scene, start)
-    env = planner.config.env
+    env = planner.env_config
     draws = np.random.default_rng(escape.seed).uniform(-1.0, 1.0, (128, 2))
     np.testing.assert_allclose([p.arcs[0] for p in plans], draws * [env.vehicle.kappa_max, env.episode.max_length_m])
     plan = planner.plan(scene, start)
     assert plan.success and any(np.array_equal(plan.arcs, p.arcs) for p in plans if p.success)
     assert [r.first_arc for r in planner.rescue] == ["policy", "policy", "uniform"]
     with pytest.raises(ValueError, match=r"first arc must be one of \('policy', 'uniform'\), got \(8, 1.0, 'grid'\)"):
-        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, rescue=((8, 1.0, "grid"),))
+        Config(rescue=((8, 1.0, "grid"),))
     with pytest.raises(ValueError, match=r"a rescue round is \(n, scale\[, first_arc\]\), got \(8,\)"):
-        NeuralParkerPlanner.from_checkpoint(CHECKPOINT, rescue=((8,),))
+        Config(rescue=((8,),))
     with pytest.raises(ValueError, match=r"first_arc must be one of \('policy', 'uniform'\), got 'grid'"):
-        SampledRollouts(planner.actor, escape.std, env, 8, first_arc="grid")
+        PolicyRollouts(planner.actor, escape.std, env, 8, first_arc="grid")
+
+
+def _env_rollout(planner, scene, start) -> np.ndarray:
+    """The mean rollout written as a plain Gymnasium loop: one ``ParkingEnv`` step per compiled mean action."""
+    from np_sim.env import ParkingEnv
+
+    env = ParkingEnv(scene, planner.env_config)
+    obs, _ = env.reset(options={"start": np.asarray(start, float)})
+    scale = np.array([planner.env_config.vehicle.kappa_max, planner.env_config.episode.max_length_m])
+    arcs, done = [], False
+    while not done:
+        action = planner.actor(obs)
+        obs, _, terminated, truncated, _ = env.step(action)
+        arcs.append(np.asarray(action, np.float64) * scale)
+        done = terminated or truncated
+    return np.array(arcs)
+
+
+def test_the_mean_rollout_is_the_batch_of_one_and_matches_a_plain_env_loop(problem, sampled):
+    """The paper's planner (zero noise, one row of the batched rollout) plays exactly the arcs a step-by-step
+    ``ParkingEnv`` loop of the same compiled policy plays, bit for bit; a zero-noise batch of several rows repeats
+    it in every row and draws no noise."""
+    scene, start = problem
+    clip = next(c for c in load_clips("eval") if c.name == "eval-1000009")
+    cases = [(scene, start), (clip.frame_scene(0, pose=clip.start), np.asarray(clip.start, float))]
+    for case_scene, case_start in cases:
+        plan = sampled._mean_rollout(case_scene, case_start)
+        np.testing.assert_array_equal(plan.arcs, _env_rollout(sampled, case_scene, case_start))
+        batch = PolicyRollouts(sampled.actor, np.zeros(2), sampled.env_config, 3, seed=11)(case_scene, case_start)
+        for row in batch:
+            np.testing.assert_array_equal(row.arcs, plan.arcs)
+            assert (row.success, row.reason) == (plan.success, plan.reason)
+    assert {p.success for p in (sampled._mean_rollout(s, q) for s, q in cases)} == {True, False}

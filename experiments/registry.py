@@ -1,0 +1,176 @@
+"""The testbed's planners by name: one registry of factories and display labels, shared by the experiment CLIs
+(`experiments.planners`, `experiments.track`, `experiments.closed_loop`).
+
+Every planner follows `np_sim.planners.protocol.Planner` (``plan(scene, start) -> Plan``, ``convention``,
+``name``). A CLI picks planners by name and builds them with ``build_planners(names, options)``: one
+`PlannerOptions` says which checkpoints the learned planners load, how NeuralParker plays its policy (a
+`np_policy.config.NeuralParkerConfig`, by default a named preset) and which convention and margin the searches
+use. Learned planners built together share one loaded policy per checkpoint.
+
+Adding a planner is one entry. Write a factory taking the options and the shared policy loader, importing the
+planner's module inside it (so a CLI loads only what it runs), and add one line to ``REGISTRY``::
+
+    def _hope(options: PlannerOptions, load: PolicyLoader) -> Planner:
+        from hope_policy.planner import HopePlanner
+
+        return HopePlanner.from_checkpoint(required_checkpoint(options.checkpoint, "hope"))
+
+    REGISTRY["hope"] = Entry("HOPE", _hope)   # or one line in the dict literal below
+
+The planner class carries ``name = "hope"`` and its ``convention``; every CLI then offers it in its planner
+choices and labels its rows with the entry's label. A planner that needs a setting the options lack adds one field
+to `PlannerOptions`.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from np_policy.config import FOOTPRINT_BEST_OF_N, PAPER, NeuralParkerConfig
+from np_sim.config import Convention
+from np_sim.errors import ConfigError
+from np_sim.planners.protocol import CONVENTIONS, Planner
+
+PolicyLoader = Callable[[Path], object]
+"""``load(path) -> np_policy.planner.Policy``: the policy stored in ``path``, loaded once per ``build_planners``."""
+
+
+@dataclass(frozen=True)
+class PlannerOptions:
+    """What the registry's factories build planners from (each CLI fills in its own defaults)."""
+
+    checkpoint: Path | None = None
+    """Policy checkpoint of the learned planners: NeuralParker, NP-Guided A*'s guide, the staged planner's second
+    stage."""
+    neuralparker: NeuralParkerConfig = PAPER
+    """How those planners play the policy (default the 'paper' preset)."""
+    footprint_checkpoint: Path | None = None
+    """Checkpoint of 'neuralparker_footprint' (the footprint-aware site policy)."""
+    neuralparker_footprint: NeuralParkerConfig = FOOTPRINT_BEST_OF_N
+    """How 'neuralparker_footprint' plays its policy (default the 'footprint_best_of_n' preset)."""
+    convention: Convention = "reference_point"
+    """Collision convention of the searches (Hybrid A*, NP-Guided A*, the staged prefix, OMPL RRT*)."""
+    search_margin_m: float = 0.0
+    """Hybrid A* and NP-Guided A*'s search plan for the footprint grown by this on every side (m)."""
+    ompl_seed: int = 0
+    """OMPL's random seed."""
+    benchmark: str | None = None
+    """The scenes the planners will plan ('factorial', 'topology', 'examples', 'site'): a checkpoint of another
+    observation layout is refused when loaded; None checks nothing."""
+
+    def __post_init__(self) -> None:
+        if self.convention not in CONVENTIONS:
+            raise ConfigError(f"PlannerOptions.convention: expected one of {CONVENTIONS}, got {self.convention!r}")
+        if not self.search_margin_m >= 0:
+            raise ConfigError(f"PlannerOptions.search_margin_m: expected >= 0 m, got {self.search_margin_m!r}")
+
+
+Factory = Callable[[PlannerOptions, PolicyLoader], Planner]
+"""``factory(options, load) -> Planner``."""
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One planner kind of the registry."""
+
+    label: str
+    """Display label of its table rows."""
+    factory: Factory
+    """Builds the planner."""
+
+
+def required_checkpoint(path: Path | None, name: str, how: str = "--checkpoint PATH") -> Path:
+    """``path`` when it exists; FileNotFoundError naming the planner and how to pass one (``how``) otherwise."""
+    if path is None:
+        raise FileNotFoundError(f"planner {name} needs a policy checkpoint; pass {how}")
+    if not Path(path).exists():
+        raise FileNotFoundError(f"planner {name}: its checkpoint {path} does not exist; pass {how} or leave {name} "
+                                f"out of the planners")
+    return Path(path)
+
+
+def _search(options: PlannerOptions):
+    from np_sim.planners import HybridAStar, HybridAStarConfig
+    from np_sim.vehicle import VehicleSpec
+
+    config = HybridAStarConfig(vehicle=VehicleSpec().inflated(options.search_margin_m))
+    return HybridAStar(config, convention=options.convention)
+
+
+def _learned(options: PlannerOptions, load: PolicyLoader, name: str):
+    from np_policy.planner import NeuralParkerPlanner
+
+    return NeuralParkerPlanner(load(required_checkpoint(options.checkpoint, name)), options.neuralparker)
+
+
+def _hybrid_astar(options: PlannerOptions, load: PolicyLoader) -> Planner:
+    return _search(options)
+
+
+def _np_guided_astar(options: PlannerOptions, load: PolicyLoader) -> Planner:
+    from np_policy.staged import NPGuidedAStar
+
+    return NPGuidedAStar(_learned(options, load, "np_guided_astar"), _search(options))
+
+
+def _staged_astar_np(options: PlannerOptions, load: PolicyLoader) -> Planner:
+    from np_policy.staged import StagedPlanner
+
+    return StagedPlanner(_learned(options, load, "staged_astar_np"), _search(options))
+
+
+def _ompl_rrtstar(options: PlannerOptions, load: PolicyLoader) -> Planner:
+    from np_sim.planners.ompl_peer import OmplPeer, OmplPeerConfig
+
+    budget = _search(options).config.time_budget_s
+    return OmplPeer(OmplPeerConfig(time_budget_s=budget, seed=options.ompl_seed), options.convention)
+
+
+def _neuralparker(options: PlannerOptions, load: PolicyLoader) -> Planner:
+    return _learned(options, load, "neuralparker")
+
+
+def _neuralparker_footprint(options: PlannerOptions, load: PolicyLoader) -> Planner:
+    from np_policy.planner import NeuralParkerPlanner
+
+    path = required_checkpoint(options.footprint_checkpoint, "neuralparker_footprint",
+                               "--set planner.footprint_checkpoint=PATH")
+    return NeuralParkerPlanner(load(path), options.neuralparker_footprint)
+
+
+REGISTRY: dict[str, Entry] = {
+    "hybrid_astar": Entry("Hybrid A*", _hybrid_astar),
+    "np_guided_astar": Entry("NP-Guided A*", _np_guided_astar),
+    "ompl_rrtstar": Entry("OMPL RRT*", _ompl_rrtstar),
+    "neuralparker": Entry("NeuralParker", _neuralparker),
+    "neuralparker_footprint": Entry("NeuralParker (footprint)", _neuralparker_footprint),
+    "staged_astar_np": Entry("Hybrid A* → NP", _staged_astar_np),
+}
+"""Every planner kind by name (module docstring: how to add one)."""
+
+
+def label(name: str) -> str:
+    """The display label of planner ``name``."""
+    return REGISTRY[name].label
+
+
+def check_names(names, allowed=None) -> list[str]:
+    """``names`` as a list; ConfigError naming the unknown ones and the known ones (``allowed``, default all)."""
+    allowed = list(REGISTRY if allowed is None else allowed)
+    unknown = [n for n in names if n not in allowed]
+    if unknown:
+        raise ConfigError(f"unknown planner(s) {unknown}; expected some of {allowed}")
+    return list(names)
+
+
+def build_planners(names, options: PlannerOptions) -> dict[str, Planner]:
+    """One planner per name, in order (FileNotFoundError when a learned planner's checkpoint is missing,
+    CheckpointError when it is broken or of another observation layout than ``options.benchmark``'s)."""
+    from np_policy.planner import Policy
+
+    check_names(names)
+    load = functools.cache(lambda path: Policy.load(path, options.benchmark))
+    return {name: REGISTRY[name].factory(options, load) for name in names}
