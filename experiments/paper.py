@@ -307,10 +307,11 @@ def compute_line(results: list[ArmResult], runs: dict) -> str:
     """Training CPU-hours (epoch wall times × this machine's cores, which torch uses) and planning CPU-hours."""
     cores = os.cpu_count() or 1
     hours = training_hours(dict.fromkeys(r.arm.configuration for r in results), runs)
-    planning = sum(row["plan_time_ms"] for r in results for rows in r.records.values() for row in rows) / 6e4
+    planning_s = sum(row["plan_time_ms"] for r in results for rows in r.records.values() for row in rows) / 1e3
+    planning = f"{planning_s / 60:.1f} CPU-min" if planning_s >= 60 else f"{planning_s:.0f} CPU-s"
     return (f"Compute: training {hours:.1f} h wall-clock so far ({hours * cores:.1f} CPU-h on this {cores}-core "
             f"machine, from the runs' `metrics.jsonl` epoch times; runs shared with other tables are counted in "
-            f"each), evaluation {planning:.1f} CPU-min of planning (sum of the records' plan times).")
+            f"each), evaluation {planning} of planning (sum of the records' plan times).")
 
 
 def bar_figure(groups: dict[str, dict[str, list[float]]], metrics, png: Path, title: str) -> bool:
@@ -365,11 +366,28 @@ def measure_all(runs: dict, evaluate: bool) -> dict[str, list[ArmResult]]:
     return out
 
 
+NOTES = {
+    TWOSTAGE.label: "Our staged rows (`np_policy.staged.StagedPlanner`) hand over the raw Hybrid A* prefix (the "
+                    "paper smooths it to continuous curvature where feasible, with the raw path as fallback); Δκ "
+                    "sums prefix and downstream and leaves out the single hand-off jump, as the caption says. Records: "
+                    "`python -m experiments.planners --methods staged_astar_np --checkpoint RUN/best.pt`.",
+    TOPOLOGY_STRESS.label: "All six rows use the fixed connector and the geodesic curriculum "
+                           "([sweep.md](sweep.md)).",
+    HERMITE.label: "Fixed Hermite and Ensemble, eval. only are the same fixed-connector checkpoints, evaluated with "
+                   "their own connector and with the ensemble swapped in "
+                   "(`python -m experiments.evaluate --connector ensemble`).",
+    CURRICULUM.label: "The rows differ only in the start ordering: without the curriculum the same start pool is "
+                      "sampled in full from the first epoch ([sweep.md](sweep.md)).",
+}
+"""What our rows do differently from, or in more detail than, the paper's text."""
+
+
 def table_section(paper: PaperTable, results: list[ArmResult], runs: dict) -> list[str]:
-    """A table's section: the side-by-side table, its claims and its compute."""
+    """A table's section: the side-by-side table, a note, its claims and its compute."""
     stats, cohorts = summarise(results)
     return [f"## {paper.number} (`{paper.label}`): {paper.title}", "", *table_lines(paper, results, stats, cohorts),
-            "", *claim_lines(paper.label, stats, results), "", compute_line(results, runs), ""]
+            "", NOTES[paper.label], "", *claim_lines(paper.label, stats, results), "", compute_line(results, runs),
+            ""]
 
 
 def case_sections(work: Path, figures: Path) -> dict[str, list[str]]:
@@ -470,14 +488,30 @@ def build_report(runs_root: Path, out_md: Path, evaluate: bool = True) -> str:
     return text
 
 
+def report_file(text: str) -> Path:
+    """The report's path: a Markdown file name (``.md``) that is not a folder (refused at parse time otherwise)."""
+    path = Path(text)
+    if path.suffix != ".md" or path.is_dir():
+        raise argparse.ArgumentTypeError(f"expected a Markdown file path ending in .md, got {text}")
+    return path
+
+
+def run_root(text: str) -> Path:
+    """An existing folder of run folders (refused at parse time otherwise)."""
+    path = Path(text)
+    if not path.is_dir():
+        raise argparse.ArgumentTypeError(f"expected an existing folder of run folders, got {text}")
+    return path
+
+
 @cli_boundary
 def main(argv=None) -> str:
     """Command-line entry point (usage in the module docstring)."""
     parser = argparse.ArgumentParser(prog="python -m experiments.paper", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=Path, default=Path("docs/reproduction.md"),
+    parser.add_argument("--out", type=report_file, default=Path("docs/reproduction.md"),
                         help="the report (Markdown; default docs/reproduction.md; figures go to figures/ beside it)")
-    parser.add_argument("--runs", type=Path, default=Path("checkpoints/runs"),
+    parser.add_argument("--runs", type=run_root, default=Path("checkpoints/runs"),
                         help="run root of the sweep (default checkpoints/runs)")
     parser.add_argument("--no-evaluate", action="store_true",
                         help="do not evaluate finished runs that have no records; report them as not evaluated")

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from shapely.geometry import Point
 
-from experiments import hermite_case, overview_case, scenes
+from cli_helpers import one_error_line
+from experiments import hermite_case, overview_case, paper, scenes
 from experiments.paper import (ARMS, CLAIMS, Arm, ArmResult, Claim, claim_verdict, compare, epoch_hours, measure,
                                summarise)
 from experiments.paper_numbers import METRICS, TABLES
@@ -180,3 +181,15 @@ def test_overview_case_hands_over_inside_the_radius(tmp_path):
     assert all(arm["success"] for arm in data["arms"].values())
     assert (tmp_path / "case" / "overview_case.png").stat().st_size > 0
     assert "NeuralParker downstream" in result["table"] and math.isfinite(data["arms"]["Unified NP"]["L"])
+
+
+@pytest.mark.parametrize("argv, words", [(["--out", "report.txt"], "ending in .md"),
+                                         (["--runs", "no/such/folder"], "existing folder of run folders")])
+def test_paper_cli_refuses_bad_paths_with_one_error_line(capsys, argv, words):
+    assert words in one_error_line(capsys, paper.main, argv)
+
+
+@needs_checkpoint
+def test_case_clis_refuse_a_negative_seed_with_one_error_line(capsys):
+    for module in (hermite_case, overview_case):
+        assert "--start-seed" in one_error_line(capsys, module.main, ["--start-seed", "-1"])
