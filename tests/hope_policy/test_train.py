@@ -1,0 +1,93 @@
+"""Tests of hope_policy/train.py: a resumed run computes bit for bit what an uninterrupted one computes, the files
+a run writes, and the CLI's refusals (one error line, exit status 2)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from cli_helpers import one_error_line
+from hope_policy.checkpoint import load_hope_checkpoint
+from hope_policy.ppo import HopePPOConfig
+from hope_policy.train import HopeTrainConfig, main, train
+from np_policy.checkpoint import CheckpointError
+
+TIMING = ("collect_s", "update_s")
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def tiny_config(**overrides) -> HopeTrainConfig:
+    """Two envs, batches of 16 transitions, two epochs of minibatches of 8: seconds per update."""
+    return HopeTrainConfig(num_envs=2, snapshot_every=1,
+                           ppo=HopePPOConfig(batch_size=16, minibatch_size=8, epochs=2), **overrides)
+
+
+@pytest.fixture(scope="module")
+def straight_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("straight")
+    rows = train(tiny_config(), out, progress=False, max_updates=2)
+    return out, rows
+
+
+def test_resume_at_an_update_boundary_is_bit_for_bit_the_uninterrupted_run(straight_run, tmp_path):
+    straight, straight_rows = straight_run
+    # the "kill": another process trains to the update-1 boundary and ends there
+    code = (f"from hope_policy.ppo import HopePPOConfig; from hope_policy.train import HopeTrainConfig, train; "
+            f"train(HopeTrainConfig.from_dict({tiny_config().to_dict()!r}), {str(tmp_path)!r}, progress=False, "
+            f"max_updates=1)")
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
+    rows = train(tiny_config(), tmp_path, resume=True, progress=False, max_updates=2)
+    assert [r["update"] for r in rows] == [1, 2]
+    strip = lambda r: {k: v for k, v in r.items() if k not in TIMING}  # noqa: E731
+    assert [strip(r) for r in rows] == [strip(r) for r in straight_rows]
+    a, b = load_hope_checkpoint(straight / "snapshot.pt"), load_hope_checkpoint(tmp_path / "snapshot.pt")
+    assert a["updates"] == b["updates"] == 2
+    for key in a["model"]:
+        assert torch.equal(a["model"][key], b["model"][key]), key
+    for part in ("critic_target",):
+        for key, value in a["ppo"][part].items():
+            assert torch.equal(value, b["ppo"][part][key]), key
+    for branch, stats in a["obs_norm"].items():
+        np.testing.assert_array_equal(stats["mean"], b["obs_norm"][branch]["mean"])
+        np.testing.assert_array_equal(stats["m2"], b["obs_norm"][branch]["m2"])
+
+
+def test_a_run_writes_its_files_and_stops_after_its_episode_budget(tmp_path):
+    rows = train(tiny_config(episodes=2), tmp_path, progress=False)
+    assert rows[-1]["episodes"] >= 2 and all(r["episodes"] < 2 for r in rows[:-1])
+    final = load_hope_checkpoint(tmp_path / "final.pt")
+    assert final["episodes"] == rows[-1]["episodes"] and "ppo" not in final
+    assert sorted(final["obs_norm"]) == ["lidar", "target"]  # the mask is not normalised
+    assert final["obs_norm"]["lidar"]["count"] > 0
+    lines = (tmp_path / "metrics.jsonl").read_text().splitlines()
+    assert [json.loads(line)["update"] for line in lines] == [r["update"] for r in rows]
+    assert json.loads((tmp_path / "config.json").read_text()) == json.loads(json.dumps(tiny_config(episodes=2).to_dict()))
+    assert list(tmp_path.glob("events.out.tfevents.*"))
+
+
+def test_cli_refuses_an_existing_run_and_a_missing_snapshot(straight_run, tmp_path, capsys):
+    straight, _ = straight_run
+    line = one_error_line(capsys, main, ["--out", str(straight)])
+    assert "already holds a training run" in line and "--resume" in line
+    line = one_error_line(capsys, main, ["--out", str(tmp_path), "--resume"])
+    assert "nothing to resume" in line
+
+
+def test_cli_refuses_what_it_cannot_train(tmp_path, capsys):
+    line = one_error_line(capsys, main, ["--out", str(tmp_path / "bev"), "--input", "bev"])
+    assert "added_input" in line and "not available" in line
+    line = one_error_line(capsys, main, ["--out", str(tmp_path / "n"), "--num-envs", "3"])
+    assert "multiple of num_envs" in line
+    assert not list(tmp_path.iterdir())
+
+
+def test_resume_refuses_a_different_config(straight_run, tmp_path, capsys):
+    straight, _ = straight_run
+    with pytest.raises(CheckpointError, match="seed: checkpoint has 0, expected 5"):
+        train(tiny_config(seed=5), straight, resume=True, progress=False, max_updates=3)
