@@ -47,6 +47,22 @@ class ObservationConfig:
     """LiDAR range cap (m)."""
     flat: bool = True
     """Flat Box observation (True) or a Dict of the streams (False)."""
+    use_bev: bool = False
+    """Include the BEV latent s^bev (paper App. B, the NeuralParker-backbone BEV control): the frozen encoder of
+    ``bev_encoder_file`` applied to the ego-aligned raster (`np_sim.bev`, no trajectory tail) at every step;
+    replaces the vertex slots, so ``use_obstacles`` and ``use_boundary`` must be off."""
+    bev_encoder_file: str = ""
+    """Pretrained BEV autoencoder file (``python -m np_policy.bev_encoder``); required when ``use_bev``."""
+    bev_latent_dim: int = 128
+    """Size of the BEV latent; must equal the encoder's."""
+
+    def __post_init__(self) -> None:
+        if self.use_bev and not self.bev_encoder_file:
+            raise ConfigError("ObservationConfig.bev_encoder_file: use_bev needs the pretrained autoencoder file "
+                              "(python -m np_policy.bev_encoder), got none")
+        if self.use_bev and (self.use_obstacles or self.use_boundary):
+            raise ConfigError("ObservationConfig.use_bev: the BEV latent replaces the vertex slots; set "
+                              "use_obstacles and use_boundary to false")
 
     def capacity(self) -> SceneCapacity:
         """The scene limits this observation imposes."""
