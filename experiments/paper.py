@@ -461,7 +461,12 @@ def build_report(runs_root: Path, out_md: Path, evaluate: bool = True) -> str:
              "success on the full set of frozen test starts, path metrics on the within-seed common-success cohort "
              "of the rows measured. A claim is checked only when every row it compares has at least two seeds; a "
              "gap within the larger seed SD of the two rows is 'within noise'. Which runs are still missing and "
-             "how to train them: [sweep.md](sweep.md).", "", "## Rows and their seeds", "", *status_lines(results),
+             "how to train them: [sweep.md](sweep.md).", "",
+             "Regenerate with `python -m experiments.paper` (about a minute here when the evaluation records exist; "
+             "a finished run without records is evaluated first, about five minutes per seed and evaluation on this "
+             "2-core machine; `--no-evaluate` skips that). The single figures: `python -m experiments.scenes`, "
+             "`python -m experiments.overview_case`, `python -m experiments.hermite_case`.", "",
+             "## Rows and their seeds", "", *status_lines(results),
              "", "## Claims", ""]
     claims_stats = {label: summarise(arms)[0] for label, arms in results.items()}
     for label in ARMS:
