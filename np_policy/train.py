@@ -504,7 +504,6 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
         return done
     prepare_run_folder(out, resume, overwrite)
     trainer = Trainer(config, out)
-    metrics_path = out / "metrics.jsonl"
     rows: list[dict[str, Any]] = []
     if resume:
         rows = _resume(trainer, config, out, last)
@@ -513,8 +512,7 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
     elif init is not None:
         trainer.initialize_from(init)
     write_atomic(out / "config.json", json.dumps(config.to_dict(), indent=2).encode())
-    write_metrics(metrics_path, rows)
-    ppo = config.ppo
+    write_metrics(out / "metrics.jsonl", rows)
     bar = tqdm(range(trainer.epoch, last), desc="epochs", unit="epoch", disable=not progress,
                initial=trainer.epoch, total=last)
     writer = event_writer(out, rows, trainer.epoch) if tensorboard else None

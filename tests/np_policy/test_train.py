@@ -66,9 +66,10 @@ def test_resume_gives_the_same_curve_as_an_uninterrupted_run(tmp_path, capsys):
     a, b = _rows(tmp_path / "straight"), _rows(tmp_path / "killed")
     assert len(a) == len(b) == 4
     assert a == b
-    wa = load_checkpoint(tmp_path / "straight" / "snapshot.pt")["model"]
-    wb = load_checkpoint(tmp_path / "killed" / "snapshot.pt")["model"]
+    wa = load_checkpoint(tmp_path / "straight" / "best.pt")["model"]
+    wb = load_checkpoint(tmp_path / "killed" / "best.pt")["model"]
     assert all(torch.equal(wa[k], wb[k]) for k in wa)
+    assert not (tmp_path / "straight" / "snapshot.pt").exists() and not (tmp_path / "killed" / "snapshot.pt").exists()
 
 
 def test_a_run_resumes_after_a_field_with_a_default_was_added_to_the_config(tmp_path):
@@ -78,13 +79,14 @@ def test_a_run_resumes_after_a_field_with_a_default_was_added_to_the_config(tmp_
     payload = load_checkpoint(snapshot)
     for key in ("site_recorded_share", "site_recorded_skip"):  # as a snapshot written before these fields existed
         del payload["config"][key]
-    save_checkpoint(snapshot, payload)
-    rows = train(config, tmp_path / "run", resume=True, progress=False)
-    assert [r["epoch"] for r in rows] == [1, 2, 3, 4]
-    payload["config"]["seed"] = 4  # a real difference still stops the resume
+    payload["config"]["seed"] = 4  # a real difference stops the resume
     save_checkpoint(snapshot, payload)
     with pytest.raises(CheckpointError, match="seed: checkpoint has 4, expected 3"):
         train(config, tmp_path / "run", resume=True, progress=False)
+    payload["config"]["seed"] = 3
+    save_checkpoint(snapshot, payload)
+    rows = train(config, tmp_path / "run", resume=True, progress=False)
+    assert [r["epoch"] for r in rows] == [1, 2, 3, 4]
 
 
 def test_cli_writes_metrics_curves_and_checkpoints(finished_run):
@@ -96,8 +98,9 @@ def test_cli_writes_metrics_curves_and_checkpoints(finished_run):
     for name in ("metrics.jsonl", "curves.png", "best.pt", "snapshot.pt", "config.json"):
         assert (run / name).stat().st_size > 0
     assert [json.loads(line)["epoch"] for line in (run / "metrics.jsonl").read_text().splitlines()] == [1, 2]
-    assert sorted(p.name for p in run.iterdir()) == ["best.pt", "config.json", "curves.png", "metrics.jsonl",
-                                                     "snapshot.pt"]  # no temporary file left behind
+    names = sorted(p.name for p in run.iterdir())  # no temporary file left behind
+    assert len(names) == 6 and names[3].startswith("events.out.tfevents.")
+    assert names[:3] + names[4:] == ["best.pt", "config.json", "curves.png", "metrics.jsonl", "snapshot.pt"]
     best = load_checkpoint(run / "best.pt", expected_config=TrainConfig.from_dict(TINY | {"seed": 0}).to_dict())
     assert {"model", "config", "return_rms", "epoch", "selection_reward"} <= set(best)
 
@@ -343,3 +346,84 @@ def test_bad_config_files_are_one_error_line(tmp_path, capsys, content, message)
     err = capsys.readouterr().err
     assert err.startswith("error: ") and len(err.strip().splitlines()) == 1 and re.search(message, err), err
     assert not (tmp_path / "run").exists()
+
+
+def _scalars(run):
+    """TensorBoard scalars under ``run`` as read back by tensorboard's own EventAccumulator: {tag: [(step, value)]}."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    accumulator = EventAccumulator(str(run), size_guidance={"scalars": 0})
+    accumulator.Reload()
+    return {tag: [(e.step, e.value) for e in accumulator.Scalars(tag)] for tag in accumulator.Tags()["scalars"]}
+
+
+def _assert_events_equal_metrics(run):
+    """Every metrics.jsonl field but ``epoch`` is one TensorBoard tag holding each epoch once, with the row's value
+    (stored as float32 by TensorBoard)."""
+    import numpy as np
+
+    rows = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines()]
+    scalars = _scalars(run)
+    assert set(scalars) == set(rows[0]) - {"epoch"}
+    for tag, points in scalars.items():
+        assert [step for step, _ in points] == [r["epoch"] for r in rows], tag
+        np.testing.assert_array_equal([value for _, value in points], np.float32([r[tag] for r in rows]), tag)
+
+
+def test_a_finished_run_drops_its_snapshot_and_resuming_it_says_it_is_finished(tmp_path, capsys):
+    """Reaching ppo.epochs removes snapshot.pt; --resume then trains nothing, changes nothing and prints that the
+    run is finished; a snapshot left by a kill between the last row and its removal is removed then; the run's
+    config.json must still match."""
+    cfg = tmp_path / "tiny.json"
+    cfg.write_text(json.dumps({k: v for k, v in TINY.items() if k not in ("benchmark", "seed")}))
+    argv = ["--benchmark", "examples", "--config", str(cfg), "--out", str(tmp_path / "run")]
+    rows = main(argv + ["--epochs", "2"])
+    run = tmp_path / "run"
+    assert [r["epoch"] for r in rows] == [1, 2] and (run / "snapshot.pt").exists()
+    assert "stopped at epoch 2 of 4; continue it with --resume" in capsys.readouterr().out
+    stopped = load_checkpoint(run / "snapshot.pt")
+    rows = main(argv + ["--resume"])
+    assert [r["epoch"] for r in rows] == [1, 2, 3, 4] and not (run / "snapshot.pt").exists()
+    assert f"{run}: finished at epoch 4 of 4" in capsys.readouterr().out
+    before = _tree(run)
+    assert [r["epoch"] for r in main(argv + ["--resume"])] == [1, 2, 3, 4]
+    assert f"{run}: finished at epoch 4 of 4" in capsys.readouterr().out
+    assert _tree(run) == before
+    save_checkpoint(run / "snapshot.pt", stopped)  # a kill after the last row, before the snapshot was removed
+    assert [r["epoch"] for r in main(argv + ["--resume", "--epochs", "3"])] == [1, 2, 3, 4]
+    assert _tree(run) == before
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv[:-2] + ["--seed", "5", "--out", str(run), "--resume"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {run / 'config.json'}: ") and "seed: checkpoint has 0, expected 5" in err
+    with pytest.raises(SystemExit):  # without --resume a finished run is still refused
+        main(argv)
+    assert "already holds a training run (metrics.jsonl, best.pt)" in capsys.readouterr().err
+
+
+def test_tensorboard_events_hold_the_metrics_rows_and_a_resume_purges_what_the_kill_left(tmp_path):
+    """The kill leaves epoch 3's row and scalars after the epoch-2 snapshot; the resume drops the row and purges
+    the scalars from step 3 on, so every step shows once with the value in metrics.jsonl."""
+    config = TrainConfig.from_dict(TINY)
+    run = tmp_path / "run"
+    train(config, run, epochs=2, progress=False)
+    _assert_events_equal_metrics(run)
+    at_two = load_checkpoint(run / "snapshot.pt")
+    train(config, run, epochs=3, resume=True, progress=False)
+    save_checkpoint(run / "snapshot.pt", at_two)  # killed during epoch 4, last snapshot at epoch 2
+    assert [step for step, _ in _scalars(run)["train_return"]] == [1, 2, 3]
+    train(config, run, resume=True, progress=False)
+    assert len(list(run.glob("events.out.tfevents.*"))) == 3
+    _assert_events_equal_metrics(run)
+    assert [step for step, _ in _scalars(run)["train_return"]] == [1, 2, 3, 4]
+
+
+def test_no_tensorboard_writes_no_events_and_a_later_logging_resume_fills_them_in(tmp_path):
+    config = TrainConfig.from_dict(TINY)
+    run = tmp_path / "run"
+    train(config, run, epochs=2, progress=False, tensorboard=False)
+    assert not list(run.glob("events.out.tfevents.*"))
+    train(config, run, epochs=3, resume=True, progress=False)
+    _assert_events_equal_metrics(run)
+    assert [step for step, _ in _scalars(run)["policy_loss"]] == [1, 2, 3]
