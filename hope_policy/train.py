@@ -44,7 +44,7 @@ from hope_policy.ppo import HopePPO, HopePPOConfig
 from hope_policy.spaces import observation_space
 from np_policy.checkpoint import CheckpointError, check_config, load_weights, write_atomic
 from np_policy.config import check_types
-from np_policy.train import prepare_run_folder, read_metrics, write_metrics
+from np_policy.train import merge_config, prepare_run_folder, read_metrics, write_metrics
 from np_sim.benchmarks import load_benchmark
 from np_sim.cli import cli_boundary, non_negative_int, positive_float, positive_int
 from np_sim.config import config_from_dict
@@ -329,13 +329,30 @@ def train(config: HopeTrainConfig, out: str | Path, resume: bool = False, overwr
     return rows
 
 
+def read_config_file(path: Path | None) -> dict[str, Any]:
+    """The JSON object of HopeTrainConfig fields in ``--config`` (empty without one); ConfigError naming the file
+    when it is not readable JSON or not an object."""
+    if path is None:
+        return {}
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise ConfigError(f"{path}: not a readable JSON file ({exc})") from None
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: expected a JSON object of HopeTrainConfig fields, got a {type(data).__name__}")
+    return data
+
+
 def build_config(args: argparse.Namespace) -> HopeTrainConfig:
-    """The run's config from the command line: the complete adapted baseline, or a representation variant."""
+    """The run's config from the command line: the complete adapted baseline or a representation variant from the
+    flags, the ``--config`` file's fields merged over it, benchmark and seed from the flags."""
     env = HopeEnvConfig(action_mask=not args.no_mask, rs_takeover=not args.no_takeover, added_input=args.input,
                         curriculum=CurriculumSchedule(enabled=args.curriculum_scale is not None,
                                                       start_fraction=args.curriculum_scale or 0.05))
-    return HopeTrainConfig(benchmark=args.benchmark, seed=args.seed, episodes=args.episodes,
-                           num_envs=args.num_envs, env=env)
+    flags = HopeTrainConfig(episodes=args.episodes, num_envs=args.num_envs, env=env).to_dict()
+    data = merge_config(flags, read_config_file(args.config))
+    data.update(benchmark=args.benchmark, seed=args.seed)
+    return HopeTrainConfig.from_dict(data)
 
 
 @cli_boundary
@@ -358,6 +375,8 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
                         help="geodesic start curriculum starting at this fraction (Table III variants: 0.05); "
                         "default: full-range starts")
     parser.add_argument("--num-envs", type=positive_int, default=16, help="envs stepped together")
+    parser.add_argument("--config", type=Path, help="JSON file of HopeTrainConfig fields merged over what the flags "
+                        "give (nested: env, ppo); unknown keys and wrong types are errors")
     args = parser.parse_args(argv)
     config = build_config(args)
     out = args.out or Path("results/hope_train") / f"{config.benchmark}_seed{config.seed}"

@@ -91,3 +91,14 @@ def test_resume_refuses_a_different_config(straight_run, tmp_path, capsys):
     straight, _ = straight_run
     with pytest.raises(CheckpointError, match="seed: checkpoint has 0, expected 5"):
         train(tiny_config(seed=5), straight, resume=True, progress=False, max_updates=3)
+
+
+def test_cli_config_file_fields_are_checked(tmp_path, capsys):
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"ppo": {"minibatch": 32}}')
+    line = one_error_line(capsys, main, ["--out", str(tmp_path / "run"), "--config", str(bad)])
+    assert "minibatch" in line
+    bad.write_text("[1, 2]")
+    line = one_error_line(capsys, main, ["--out", str(tmp_path / "run"), "--config", str(bad)])
+    assert f"{bad}: expected a JSON object" in line
+    assert not (tmp_path / "run").exists()
