@@ -67,7 +67,8 @@ def test_a_run_writes_its_files_and_stops_after_its_episode_budget(tmp_path):
     assert final["obs_norm"]["lidar"]["count"] > 0
     lines = (tmp_path / "metrics.jsonl").read_text().splitlines()
     assert [json.loads(line)["update"] for line in lines] == [r["update"] for r in rows]
-    assert json.loads((tmp_path / "config.json").read_text()) == json.loads(json.dumps(tiny_config(episodes=2).to_dict()))
+    written = json.loads((tmp_path / "config.json").read_text())
+    assert written == json.loads(json.dumps(tiny_config(episodes=2).to_dict()))
     assert list(tmp_path.glob("events.out.tfevents.*"))
 
 
