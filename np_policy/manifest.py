@@ -78,12 +78,17 @@ def _source_run(path: Path, payload: dict[str, Any], runs: list[Path], digest: s
     return found[0].parent, found[0]
 
 
+def _folder(root: str | Path) -> Path:
+    """``root`` as a Path; a CheckpointError when it is not a folder."""
+    if not Path(root).is_dir():
+        raise CheckpointError(f"{root}: expected the checkpoints folder")
+    return Path(root)
+
+
 def build_manifest(root: str | Path = DEFAULT_ROOT) -> dict[str, Any]:
     """The manifest of the checkpoint folder ``root`` (see the module docstring); paths are relative to
     ``root``'s parent (the repository), so they read ``checkpoints/...``."""
-    root = Path(root)
-    if not root.is_dir():
-        raise CheckpointError(f"{root}: expected the checkpoints folder")
+    root = _folder(root)
     base = root.resolve().parent
     rel = lambda p: Path(p).resolve().relative_to(base).as_posix()  # noqa: E731
     runs = run_folders(root)
@@ -134,7 +139,7 @@ def read_manifest(path: Path) -> dict[str, Any]:
 def check_manifest(root: str | Path = DEFAULT_ROOT) -> dict[str, Any]:
     """The manifest of ``root`` when ``root/MANIFEST.json`` matches the files (every hash recomputed, every
     checkpoint loaded); else a CheckpointError listing every difference."""
-    root = Path(root)
+    root = _folder(root)
     stored = read_manifest(root / MANIFEST_FILE)
     built = build_manifest(root)
     problems = manifest_differences(stored, built)

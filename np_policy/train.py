@@ -561,7 +561,8 @@ def main(argv=None) -> list[dict[str, Any]]:
                         "the LR schedule and curriculum still follow ppo.epochs")
     parser.add_argument("--out", type=Path, help="run folder (default: results/train/<benchmark>_seed<N>); a folder "
                         "that already holds a run is refused without --resume or --overwrite")
-    parser.add_argument("--resume", action="store_true", help="continue from <out>/snapshot.pt")
+    parser.add_argument("--resume", action="store_true", help="continue from <out>/snapshot.pt (on a finished run: "
+                        "says so and trains nothing)")
     parser.add_argument("--overwrite", action="store_true", help="replace the run in --out (its metrics, "
                         "curves and checkpoints are deleted)")
     parser.add_argument("--init", type=Path, help="start a new run from this checkpoint's weights (same observation "
