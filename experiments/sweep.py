@@ -8,7 +8,8 @@ Each run is a (configuration, benchmark, seed) with its own run folder under ``-
 starts a local Ray sized to this machine (or joins the cluster at ``--ray-address``; the run root must then be on
 storage every node shares, with the project installed on every node) and submits one Ray task per run that is
 not finished, requesting ``--cpus-per-run`` CPUs and, where the cluster has GPUs, ``--gpus-per-run`` GPUs. A task
-runs ``python -m np_policy.train`` in a subprocess (its log under ``--log-dir``): with ``--resume`` when the
+runs the configuration's trainer (``python -m np_policy.train``; ``hope_policy.train`` for the adapted HOPE) in a
+subprocess (its log under ``--log-dir``): with ``--resume`` when the
 folder holds ``snapshot.pt``, from epoch 0 otherwise (``--overwrite`` when a run killed before its first snapshot
 left files there). Finished runs are skipped, so a killed sweep continues where
 it stopped when started again. A run that a ``np_policy.train`` process on this machine is writing, or whose
@@ -29,8 +30,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from experiments.sweep_plan import RunSpec, RunState, active_trainers, expand, format_table, holds_run_files, \
-    load_plan, metrics_epoch, run_state
+from experiments.sweep_plan import TRAINERS, RunSpec, RunState, active_trainers, expand, format_table, \
+    holds_run_files, load_plan, metrics_epoch, run_state
 from np_sim.cli import non_negative_float, non_negative_int, positive_int
 from np_sim.errors import ConfigError
 
@@ -48,7 +49,7 @@ def train_argv(run: RunSpec, config_file: Path) -> list[str]:
             "--out", str(run.run_dir)]
     if (run.run_dir / "snapshot.pt").exists():
         return [*argv, "--resume"]
-    return [*argv, "--overwrite"] if holds_run_files(run.run_dir) else argv
+    return [*argv, "--overwrite"] if holds_run_files(run.run_dir, run.config.trainer) else argv
 
 
 def _kill_with_parent() -> None:
@@ -65,7 +66,7 @@ def train_run(run: RunSpec, log_path: Path) -> dict[str, Any]:
     with tempfile.TemporaryDirectory(prefix="sweep-") as tmp:
         config_file = Path(tmp) / f"{run.name}.json"
         config_file.write_text(json.dumps(run.overrides, indent=2))
-        argv = [sys.executable, "-m", "np_policy.train", *train_argv(run, config_file)]
+        argv = [sys.executable, "-m", run.config.trainer, *train_argv(run, config_file)]
         with log_path.open("ab") as log:
             log.write(("\n$ " + " ".join(argv) + "\n").encode())
             log.flush()
@@ -107,7 +108,7 @@ def _progress_text(running: list[RunSpec], since: float) -> str:
     for run in running:
         path = run.run_dir / "metrics.jsonl"
         if path.exists() and path.stat().st_mtime >= since:
-            parts.append(f"{run.name} {metrics_epoch(path)}/{run.epochs}")
+            parts.append(f"{run.name} {metrics_epoch(path, TRAINERS[run.config.trainer][0])}/{run.epochs}")
     return ", ".join(parts)
 
 

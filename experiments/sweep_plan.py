@@ -5,13 +5,16 @@ benchmark, seed) with its own run folder under the run root. A configuration's t
 `TrainConfig` overrides in ``checkpoints/configs/``; every NeuralParker row of the Factorial and Topology-Stress
 benchmarks merges its file over one shared recipe, ``checkpoints/configs/recipe.json`` (paper Table
 ``tab:app-ppo`` with the whole-lot reading of the geodesic curriculum, the file the shipped Factorial seeds were
-trained with as ``lot.json``). A configuration that cannot be trained today (adapted HOPE, BEV, the HOPE-style
-backbone) is in the plan with the reason, so it is listed as "not available yet" and never silently dropped.
+trained with as ``lot.json``). The adapted-HOPE row is trained by ``hope_policy.train`` from a file of
+`hope_policy.train.HopeTrainConfig` fields (its progress counted in episodes, its finished checkpoint ``final.pt``;
+`TRAINERS`). A configuration that cannot be trained today (BEV, the HOPE-style backbone) is in the plan with the
+reason, so it is listed as "not available yet" and never silently dropped.
 
 A run's **state** is read from its folder alone (`run_state`), never by loading a checkpoint:
 
 - *finished*: ``metrics.jsonl``'s last complete row is epoch ``ppo.epochs`` of the run's config and ``best.pt``
-  exists (the trainer appends the row, then writes ``best.pt`` and the final ``snapshot.pt``);
+  exists (the trainer appends the row, then writes ``best.pt`` and the final ``snapshot.pt``); for the adapted
+  HOPE, the last row has counted ``episodes`` of its config and ``final.pt`` exists;
 - *interrupted*: ``snapshot.pt`` exists but the last row is an earlier epoch; the sweep resumes it (``--resume``);
 - *started, no snapshot*: run files (``metrics.jsonl``, ``best.pt``) but no ``snapshot.pt`` (killed before its
   first snapshot): nothing to resume, the sweep trains it from epoch 0 with ``--overwrite`` (which replaces those
@@ -24,6 +27,7 @@ A run's **state** is read from its folder alone (`run_state`), never by loading 
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 from dataclasses import dataclass
@@ -42,6 +46,13 @@ FACTORIAL_EPOCH_S = 46.8
 SITE_EPOCH_S = 83.0
 """Seconds per epoch of the site run on this machine: its last ten epochs (65,536 steps each, ``steps_per_s`` of
 its ``metrics.jsonl``) took 81–88 s, about 5.5 h per 240-epoch run (compute estimates)."""
+HOPE_EPISODE_S = 0.18
+"""Seconds per adapted-HOPE training episode on this machine: one collect of 8,192 transitions (9.2 s of CPU time)
+and one update (47.4 s) completed 316 episodes at the start of a run (compute estimates; measured as process CPU
+time with the machine's two cores shared by other jobs, when the wall clock ran about ten times longer)."""
+TRAINERS = {"np_policy.train": ("epoch", "best.pt"), "hope_policy.train": ("episodes", "final.pt")}
+"""The modules that train a configuration (``python -m``): the ``metrics.jsonl`` field that counts a run's progress
+and the file a finished run holds."""
 TABLES = {
     "main": "Fig. 3, main comparison on the Factorial benchmark",
     "staged": "Table II, unified versus staged planning",
@@ -74,12 +85,13 @@ class Configuration:
     run_name: str = "{name}_seed{seed}"
     """Run folder name under the run root."""
     epoch_s: float = FACTORIAL_EPOCH_S
-    """Estimated seconds per epoch on this machine."""
+    """Estimated seconds per epoch (per episode for the adapted HOPE) on this machine."""
+    trainer: str = "np_policy.train"
+    """The module that trains it, a key of `TRAINERS`."""
 
 
 _LOT = "{name}_seed{seed}_lot"
 """Run folders of the recipe's rows: the shipped Factorial seeds were named for the whole-lot curriculum."""
-_HOPE = "the adapted HOPE planner is not built yet"
 _HOPE_STYLE = "the HOPE-style backbone is not built yet"
 _BEV = "the BEV representation (rendered image and pretrained autoencoder) is not built yet"
 PAPER_PLAN = (
@@ -88,7 +100,8 @@ PAPER_PLAN = (
     Configuration("factorial_np_fixed", "factorial", ("connector",), "factorial_np_fixed.json", run_name=_LOT),
     Configuration("factorial_np_nocurriculum", "factorial", ("curriculum",), "factorial_np_nocurriculum.json",
                   run_name=_LOT),
-    Configuration("factorial_hope", "factorial", ("main", "staged"), missing=_HOPE),
+    Configuration("factorial_hope", "factorial", ("main", "staged"), "factorial_hope.json", recipe=False,
+                  epoch_s=HOPE_EPISODE_S, trainer="hope_policy.train"),
     Configuration("topology_np_none", "topology", ("representation",), "topology_np_none.json", run_name=_LOT),
     Configuration("topology_np_bev", "topology", ("representation",), missing=_BEV),
     Configuration("topology_np_vertices", "topology", ("representation",), "topology_np_vertices.json",
@@ -122,6 +135,8 @@ def load_plan(plan: str) -> tuple[tuple[Configuration, ...], Path]:
             raise ConfigError(f"{where}: expected a non-empty 'name' and a non-empty list of 'tables' (strings)")
         if config.config_file is None and not config.missing:
             raise ConfigError(f"{where}: give 'config_file', or 'missing' (why it is not available yet)")
+        if config.trainer not in TRAINERS:
+            raise ConfigError(f"{where}.trainer: expected one of {sorted(TRAINERS)}, got {config.trainer!r}")
         if not isinstance(config.run_name, str) or "{seed}" not in config.run_name:
             raise ConfigError(f"{where}.run_name: expected a folder name pattern with {{seed}} (and optionally "
                               f"{{name}}), got {config.run_name!r}")
@@ -143,7 +158,7 @@ class RunSpec:
     overrides: dict[str, Any] | None
     """The TrainConfig overrides given to ``np_policy.train --config`` (None: not available yet)."""
     epochs: int | None
-    """The recipe's ``ppo.epochs`` (None: not available yet)."""
+    """The recipe's ``ppo.epochs``, the adapted HOPE's ``episodes`` (None: not available yet)."""
 
     @property
     def name(self) -> str:
@@ -173,9 +188,15 @@ def read_overrides(path: Path) -> dict[str, Any]:
     return data
 
 
-def resolved_config(benchmark: str, seed: int, overrides: dict[str, Any]):
-    """The `TrainConfig` ``np_policy.train --benchmark B --seed S --config FILE`` builds from ``overrides``."""
+def resolved_config(benchmark: str, seed: int, overrides: dict[str, Any], trainer: str = "np_policy.train"):
+    """The `TrainConfig` ``np_policy.train --benchmark B --seed S --config FILE`` builds from ``overrides`` (the
+    `HopeTrainConfig` of ``hope_policy.train`` with ``trainer='hope_policy.train'``)."""
     from np_policy.train import TrainConfig, benchmark_defaults, merge_config
+
+    if trainer == "hope_policy.train":
+        from hope_policy.train import HopeTrainConfig
+
+        return HopeTrainConfig.from_dict({**overrides, "benchmark": benchmark, "seed": seed})
 
     data = merge_config(benchmark_defaults(benchmark), overrides)
     data.update(benchmark=benchmark, seed=seed)
@@ -210,7 +231,8 @@ def expand(plan, seeds, root: Path, only=None, config_dir: Path = CONFIG_DIR) ->
             epochs = None
             if overrides is not None:
                 try:
-                    epochs = resolved_config(config.benchmark, seed, overrides).ppo.epochs
+                    resolved = resolved_config(config.benchmark, seed, overrides, config.trainer)
+                    epochs = resolved.episodes if config.trainer == "hope_policy.train" else resolved.ppo.epochs
                 except ConfigError as exc:
                     raise ConfigError(f"{Path(config_dir) / config.config_file}: {exc}") from None
             run_dir = Path(root) / config.run_name.format(name=config.name, seed=seed)
@@ -218,15 +240,15 @@ def expand(plan, seeds, root: Path, only=None, config_dir: Path = CONFIG_DIR) ->
     return runs
 
 
-def metrics_epoch(path: Path) -> int:
-    """The epoch of the last complete row of a ``metrics.jsonl`` (0 when absent or empty); a torn last line is
-    skipped."""
+def metrics_epoch(path: Path, key: str = "epoch") -> int:
+    """The ``key`` (epoch; episodes for the adapted HOPE) of the last complete row of a ``metrics.jsonl`` (0 when
+    absent or empty); a torn last line is skipped."""
     if not path.exists():
         return 0
     epoch = 0
     for line in path.read_text(errors="replace").splitlines():
         try:
-            epoch = int(json.loads(line)["epoch"])
+            epoch = int(json.loads(line)[key])
         except (ValueError, KeyError, TypeError):
             continue
     return epoch
@@ -234,16 +256,15 @@ def metrics_epoch(path: Path) -> int:
 
 def config_conflicts(run: RunSpec) -> list[str]:
     """Fields where the folder's ``config.json`` differs from the plan's config (empty when it has none)."""
-    from np_policy.train import TrainConfig
-
     path = run.run_dir / "config.json"
     if not path.exists():
         return []
+    ours = resolved_config(run.config.benchmark, run.seed, run.overrides, run.config.trainer)
     try:
-        theirs = TrainConfig.from_dict(json.loads(path.read_text())).to_dict()
+        theirs = type(ours).from_dict(json.loads(path.read_text())).to_dict()
     except (ValueError, ConfigError) as exc:
         return [f"config.json unreadable: {exc}"]
-    ours = resolved_config(run.config.benchmark, run.seed, run.overrides).to_dict()
+    ours = ours.to_dict()
     return _differences(ours, theirs, "")
 
 
@@ -265,7 +286,7 @@ def active_trainers() -> dict[Path, int]:
             cwd = Path(os.readlink(proc / "cwd"))
         except OSError:
             continue
-        if "np_policy.train" in argv and "--out" in argv[:-1]:
+        if any(trainer in argv for trainer in TRAINERS) and "--out" in argv[:-1]:
             out = Path(argv[argv.index("--out") + 1])
             active[(cwd / out).resolve()] = int(proc.name)
     return active
@@ -275,27 +296,27 @@ def run_state(run: RunSpec, active: dict[Path, int] | None = None) -> RunState:
     """The state of ``run``'s folder (see the module docstring)."""
     if run.overrides is None:
         return RunState("not available yet", detail=run.config.missing)
-    epoch = metrics_epoch(run.run_dir / "metrics.jsonl")
+    key, finished_file = TRAINERS[run.config.trainer]
+    epoch = metrics_epoch(run.run_dir / "metrics.jsonl", key)
     pid = (active or {}).get(run.run_dir.resolve())
     if pid is not None:
         return RunState("training now", epoch, f"pid {pid}")
     conflicts = config_conflicts(run)
     if conflicts:
         return RunState("config differs", epoch, "; ".join(conflicts))
-    if epoch >= run.epochs and (run.run_dir / "best.pt").exists():
+    if epoch >= run.epochs and (run.run_dir / finished_file).exists():
         return RunState("finished", epoch)
     if (run.run_dir / "snapshot.pt").exists():
         return RunState("interrupted", epoch)
-    if holds_run_files(run.run_dir):
+    if holds_run_files(run.run_dir, run.config.trainer):
         return RunState("started, no snapshot", epoch)
     return RunState("not started")
 
 
-def holds_run_files(folder: Path) -> bool:
-    """Whether ``folder`` holds any of the files that make ``np_policy.train`` see a run there (`RUN_FILES`)."""
-    from np_policy.train import RUN_FILES
-
-    return any((Path(folder) / name).exists() for name in RUN_FILES)
+def holds_run_files(folder: Path, trainer: str = "np_policy.train") -> bool:
+    """Whether ``folder`` holds any of the files that make ``trainer`` see a run there (its ``RUN_FILES``)."""
+    run_files = importlib.import_module(trainer).RUN_FILES
+    return any((Path(folder) / name).exists() for name in run_files)
 
 
 def epochs_left(run: RunSpec, state: RunState) -> int | None:
@@ -303,6 +324,8 @@ def epochs_left(run: RunSpec, state: RunState) -> int | None:
     last multiple of ``ppo.snapshot_every_epochs`` reached, so this is an upper bound for an interrupted run."""
     if run.epochs is None or state.kind in ("finished", "config differs"):
         return None if run.epochs is None else 0
+    if state.kind in ("interrupted", "training now") and run.config.trainer == "hope_policy.train":
+        return run.epochs - min(state.epoch, run.epochs)  # episodes; its last snapshot is a few updates back
     if state.kind in ("interrupted", "training now"):
         every = resolved_config(run.config.benchmark, run.seed, run.overrides).ppo.snapshot_every_epochs
         return run.epochs - min(state.epoch, run.epochs) // every * every
@@ -336,6 +359,7 @@ def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
         lines.append(f"{run.name:<38} {','.join(run.config.tables):<34} {shown:>11}  {describe(state)}")
     unknown = sum(estimate_hours(r, s) is None for r, s in zip(runs, states))
     lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine (an estimate: {FACTORIAL_EPOCH_S} s "
-                 f"per Factorial or Topology-Stress epoch, {SITE_EPOCH_S} s per site epoch)"
+                 f"per Factorial or Topology-Stress epoch, {SITE_EPOCH_S} s per site epoch, {HOPE_EPISODE_S} s per "
+                 "adapted-HOPE episode)"
                  + (f", not counting {unknown} run(s) not available yet" if unknown else ""))
     return "\n".join(lines)

@@ -142,7 +142,10 @@ def test_paper_plan_recognises_the_shipped_runs():
     assert states["site_np_seed0"].kind in ("interrupted", "training now", "finished")
     assert states["site_np_seed0"].epoch >= 65 and runs["site_np_seed0"].epochs == 240
     unavailable = sorted(name for name, state in states.items() if state.kind == "not available yet")
-    assert len(unavailable) == 15 and all("hope" in n or "bev" in n for n in unavailable)
+    assert len(unavailable) == 12 and all("hopestyle" in n or "bev" in n for n in unavailable)
+    hope = runs["factorial_hope_seed0"]  # trained by hope_policy.train, progress counted in episodes
+    assert hope.config.trainer == "hope_policy.train" and hope.epochs == 10_000
+    assert states["factorial_hope_seed0"].kind in ("not started", "interrupted", "training now", "finished")
     fixed = resolved_config("factorial", 0, runs["factorial_np_fixed_seed0_lot"].overrides)
     shipped = json.loads((REPO / "checkpoints/runs/factorial_np_seed0_lot/config.json").read_text())
     assert fixed.env.connector.mode == "fixed" and fixed.curriculum_region == shipped["curriculum_region"] == "lot"
