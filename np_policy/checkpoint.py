@@ -242,7 +242,8 @@ def describe_layout(observation: dict[str, Any]) -> str:
     obstacles = (f"{o.get('max_obstacles')} obstacles x {o.get('vertices_per_obstacle')} vertices"
                  if o.get("use_obstacles") else "no obstacle slots")
     boundary = f"{o.get('max_boundary_segments')} boundary segments" if o.get("use_boundary") else "no boundary slots"
-    return f"{obstacles}, {boundary}, {lidar}"
+    bev = f", BEV latent {o.get('bev_latent_dim')} from {o.get('bev_encoder_file')}" if o.get("use_bev") else ""
+    return f"{obstacles}, {boundary}, {lidar}{bev}"
 
 
 def check_layout(path: str | Path, stored: dict[str, Any], expected: dict[str, Any], stored_name: str,

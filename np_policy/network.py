@@ -8,12 +8,18 @@ Streams follow ``ObservationConfig`` and are sliced from the flat observation wi
 | lidar      | n_beams (120)          | MLP 120 → 64 → 128 (one fusion token), when ``use_lidar``              |
 | obstacles  | 20 slots × 16          | per-slot MLP 16 → 64 → 16 (geometry tokens), when ``use_obstacles``    |
 | boundary   | 10 slots × 4           | per-slot MLP 4 → 64 → 16 (geometry tokens), when ``use_boundary``      |
+| bev        | bev_latent_dim (128)   | MLP 128 → 64 → 128 (one fusion token), when ``use_bev``                |
 
 Geometry tokens get a learned positional embedding per slot (30 slots) and pass one self-attention block
 (``Attn(Z) = softmax((Z W_Q)(Z W_K)^T / √d) Z W_V``, d = 16, one head) followed by a feed-forward block, each
 with a residual connection and LayerNorm (post-norm). There is **no padding mask**: unused slots carry the −1e4
 sentinel through the stream MLP and attention as they are (paper App. A). The tokens are mean-pooled and
 projected to one 128-D fusion token (the global geometry summary).
+
+The BEV branch (paper App. B, the NeuralParker-backbone BEV control) replaces the geometry tokens: the env's
+frozen-encoder latent of the BEV raster (``np_policy.bev_encoder``) passes a stream MLP to one fusion token, so the
+fusion sees ego, LiDAR and BEV tokens. Without ``use_bev`` the network, its parameters and their initialisation
+are those of the other configurations unchanged.
 
 Global–local fusion: the geometry, ego and LiDAR tokens (128-D each) pass ``fusion_depth`` (1) transformer layers
 with 4 heads of 32; the output tokens are flattened (so each stream keeps its identity) and projected to the
@@ -41,6 +47,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
+import np_policy.bev_encoder  # noqa: F401 (registers the frozen-encoder loader of the env's BEV observation)
 from np_sim.config import ObservationConfig
 from np_sim.observation import observation_sections, observation_size
 from np_policy.config import NetworkConfig
@@ -115,7 +122,8 @@ class SceneEncoder(nn.Module):
             self.slot_position = nn.Parameter(torch.randn(n_slots, t) * 0.02)
             self.geometry_attention = SelfAttentionBlock(t, net.token_heads, net.token_ff_dim)
             self.geometry_summary = nn.Linear(t, d)
-        self.n_tokens = 1 + (self.lidar is not None) + (n_slots > 0)
+        self.bev = _mlp([obs_config.bev_latent_dim, h, d]) if "bev" in self.sections else None
+        self.n_tokens = 1 + (self.lidar is not None) + (n_slots > 0) + (self.bev is not None)
         self.fusion = nn.Sequential(*[SelfAttentionBlock(d, net.fusion_heads, net.fusion_ff_dim)
                                       for _ in range(net.fusion_depth)])
         self.project = nn.Linear(self.n_tokens * d, d)
@@ -147,6 +155,8 @@ class SceneEncoder(nn.Module):
         if self.n_slots:
             geometry = self.geometry_attention(self.geometry_tokens(obs))
             tokens.append(self.geometry_summary(geometry.mean(dim=1)))
+        if self.bev is not None:
+            tokens.append(self.bev(self._slice(obs, "bev")))
         fused = self.fusion(torch.stack(tokens, dim=1))
         return F.relu(self.project(fused.flatten(1)))
 
