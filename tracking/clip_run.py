@@ -50,6 +50,7 @@ from np_sim.collision import path_valid
 from np_sim.errors import StartInCollisionError
 from np_sim.frames import place
 from np_sim.plan import Plan
+from np_sim.planners import CONVENTIONS, Planner
 from np_sim.scene import PolygonObstacle, Scene
 from tracking.config import ExecutorConfig, TrackerConfig, WorldConfig
 from tracking.executor import execute, parked, plan_problem
@@ -139,18 +140,6 @@ class _FollowedPath:
     def at_end(self) -> bool:
         """The progress index is at the last sample or the one before (the executor ends a segment 0.05 m short)."""
         return self.index >= len(self.poses) - 2
-
-
-def planner_convention(planner) -> str:
-    """The collision convention ``planner`` plans under: NeuralParker's env config, a search's ``convention``,
-    NP-Guided A*'s search."""
-    for owner in (planner, getattr(planner, "search", None)):
-        if owner is not None and isinstance(getattr(owner, "convention", None), str):
-            return owner.convention
-    config = getattr(planner, "config", None)
-    if config is not None and hasattr(config, "env"):
-        return config.env.collision
-    raise ValueError(f"planner_convention: cannot tell the collision convention of {type(planner).__name__}")
 
 
 @dataclass(frozen=True)
@@ -289,7 +278,13 @@ class ReplanningLoop:
     def __init__(self, clip: Clip, planner, config: ClipRunConfig, log=None):
         self.clip, self.planner, self.config, self.log = clip, planner, config, log
         self.tracker = config.tracker
-        self.convention = planner_convention(planner)
+        if not isinstance(planner, Planner):
+            raise TypeError(f"run_clip: expected a planner (np_sim.planners.Planner: plan, convention and name), got "
+                            f"{type(planner).__name__}")
+        if planner.convention not in CONVENTIONS:
+            raise ValueError(f"run_clip: {type(planner).__name__}.convention: expected one of {CONVENTIONS}, got "
+                             f"{planner.convention!r}")
+        self.convention = planner.convention
         self.calls: list[PlanCall] = []
         self.followed: _FollowedPath | None = None
         self.retry_at_s = 0.0
@@ -384,8 +379,9 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
     clip
         A site clip (`np_sim.clips.load_clips`).
     planner
-        Anything with ``plan(scene, start) -> Plan`` (NeuralParker, NP-Guided A*, Hybrid A*); a
-        `np_sim.errors.StartInCollisionError` it raises counts as a failed call, any other error propagates.
+        A `np_sim.planners.Planner` (NeuralParker, NP-Guided A*, Hybrid A*); replans are checked under its
+        ``convention``. A `np_sim.errors.StartInCollisionError` it raises counts as a failed call, any other error
+        propagates.
     controller
         Lateral controller of the tracker.
     config

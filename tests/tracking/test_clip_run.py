@@ -1,5 +1,6 @@
 """tracking.clip_run: a vehicle whose first planner calls fail waits at its start and retries; a start in
-collision is a failed call, any other configuration error stops the run; stitched replans."""
+collision is a failed call, any other configuration error stops the run; a planner must name its collision
+convention; stitched replans."""
 
 import dataclasses
 
@@ -18,7 +19,7 @@ from tracking.executor import plan_problem
 class FailingFirst:
     """Hybrid A* (footprint) behind ``failures`` failed calls."""
 
-    convention = "footprint"
+    name, convention = "failing_first", "footprint"
 
     def __init__(self, failures: int):
         self.failures, self.search = failures, HybridAStar(convention="footprint")
@@ -134,3 +135,23 @@ def test_a_configuration_error_other_than_a_start_in_collision_propagates():
     with pytest.raises(ConfigError, match="step_m") as caught:
         run_clip(clip, Misconfigured(0))
     assert not isinstance(caught.value, StartInCollisionError)
+
+
+class NoConvention:
+    """Plans like a planner but names no collision convention."""
+
+    name = "no_convention"
+
+    def plan(self, scene, start):
+        return HybridAStar(convention="footprint").plan(scene, start)
+
+
+def test_a_planner_without_a_known_collision_convention_is_refused():
+    clip = next(c for c in load_clips("eval") if c.name == "eval-1000016")
+    with pytest.raises(TypeError, match="run_clip: expected a planner .* got NoConvention"):
+        run_clip(clip, NoConvention())
+    planner = FailingFirst(0)
+    planner.convention = "corners"
+    expected = r"FailingFirst.convention: expected one of \('reference_point', 'footprint'\), got 'corners'"
+    with pytest.raises(ValueError, match=expected):
+        run_clip(clip, planner)
