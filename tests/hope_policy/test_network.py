@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 import torch
 import torch.nn.functional as F
 
@@ -14,6 +15,15 @@ from hope_policy.network import AttentionBlock, HopeActorCritic, Modalities
 
 FULL = Modalities((("lidar", 120), ("target", 5), ("action_mask", 42)))
 NO_MASK = Modalities((("lidar", 120), ("target", 5)))
+
+
+@pytest.fixture(autouse=True, scope="module")
+def one_torch_thread():
+    """Small networks: one thread is fastest, and avoids OpenMP spinning when the machine's cores are busy."""
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
 
 
 def linear(n_in, n_out, bias=True):
@@ -73,7 +83,7 @@ def test_orthogonal_initialisation_and_zero_bias():
     model = HopeActorCritic(FULL)
     w = model.actor.embed["lidar"][2].weight.detach()  # square 128 × 128
     torch.testing.assert_close(w @ w.T, torch.eye(128), rtol=0, atol=1e-5)
-    assert all(float(m.bias.abs().max()) == 0.0 for m in model.modules()
+    assert all(float(m.bias.detach().abs().max()) == 0.0 for m in model.modules()
                if isinstance(m, torch.nn.Linear) and m.bias is not None)
     assert math.isclose(float(model.actor.embed["target"][0].weight.detach().T.matmul(
         model.actor.embed["target"][0].weight.detach()).trace()), 5.0, rel_tol=1e-5)
