@@ -46,10 +46,11 @@ FACTORIAL_EPOCH_S = 46.8
 SITE_EPOCH_S = 83.0
 """Seconds per epoch of the site run on this machine: its last ten epochs (65,536 steps each, ``steps_per_s`` of
 its ``metrics.jsonl``) took 81–88 s, about 5.5 h per 240-epoch run (compute estimates)."""
-HOPE_EPISODE_S = 0.18
-"""Seconds per adapted-HOPE training episode on this machine: one collect of 8,192 transitions (9.2 s of CPU time)
-and one update (47.4 s) completed 316 episodes at the start of a run (compute estimates; measured as process CPU
-time with the machine's two cores shared by other jobs, when the wall clock ran about ten times longer)."""
+HOPE_EPISODE_S = 0.19
+"""Seconds per adapted-HOPE training episode on this machine: the first two collects of 8,192 transitions (9.2 and
+8.7 s of CPU time) and updates (47.4 and 52.3 s) of a run completed 316 and 310 episodes (compute estimates;
+measured as process CPU time with the machine's two cores shared by other jobs, when the wall clock ran about ten
+times longer)."""
 TRAINERS = {"np_policy.train": ("epoch", "best.pt"), "hope_policy.train": ("episodes", "final.pt")}
 """The modules that train a configuration (``python -m``): the ``metrics.jsonl`` field that counts a run's progress
 and the file a finished run holds."""
