@@ -121,10 +121,6 @@ def _tensors(obs: dict[str, np.ndarray]) -> dict[str, torch.Tensor]:
     return {key: torch.tensor(np.asarray(value, np.float32)) for key, value in obs.items()}
 
 
-def _rows(obs: dict[str, np.ndarray], rows: np.ndarray) -> dict[str, np.ndarray]:
-    return {key: value[rows] for key, value in obs.items()}
-
-
 class HopeTrainer:
     """State of one adapted-HOPE run: envs, model, PPO, normaliser, generators and counters."""
 
@@ -176,7 +172,8 @@ class HopeTrainer:
             obs_n = self.normaliser(obs)
             action, dist = self._act(obs, obs_n)
             obs, reward, terminated, truncated, info = self.envs.step(action)
-            executed = info["executed_action"].astype(np.float32)  # a takeover chunk replaces the policy's action
+            # a takeover chunk replaces the policy's action; HOPE stores and scores the chunk
+            executed = np.where(info["rs_takeover"][:, None], info["executed_action"], action).astype(np.float32)
             with torch.no_grad():
                 log_prob = dist.log_prob(torch.tensor(executed)).sum(-1).numpy()
             done = terminated | truncated
