@@ -4,8 +4,8 @@ Entity paths:
 
 * ``world/scene/boundary``, ``world/scene/obstacles``, ``world/scene/target`` (static): the scene and the target
   footprint;
-* ``world/plan`` (static for the first plan, on ``sim_time`` for replans): the planned path per gear segment
-  (forward green, reverse red);
+* ``world/plan`` (on ``sim_time``: the first plan at 0, each replan at its time; never static, since static data
+  would hide every replan): the planned path per gear segment (forward green, reverse red);
 * ``world/vehicle/footprint``, ``world/vehicle/reference_point`` (on ``sim_time``): the chassis rectangle;
 * ``world/executed`` (static, at the end): the executed reference-point trajectory;
 * ``world/contacts`` (on ``sim_time``): chassis contact points, labelled with the touched geom;
@@ -128,10 +128,10 @@ class RerunObserver(RunObserver):
         self.rec.set_time("sim_time", duration=t)
         self.rec.log(f"camera/{camera}", rr.Image(frame).compress(jpeg_quality=80))
 
-    def _log_plan(self, segments, static: bool) -> None:
+    def _log_plan(self, t: float, segments) -> None:
+        self.rec.set_time("sim_time", duration=t)
         self.rec.log("world/plan", rr.LineStrips2D([seg.xy for seg in segments],
-                                                   colors=[_GEAR_COLORS[seg.gear] for seg in segments],
-                                                   radii=0.04), static=static)
+                                                   colors=[_GEAR_COLORS[seg.gear] for seg in segments], radii=0.04))
 
     def on_start(self, world, plan, segments) -> None:
         scene, rec = world.scene, self.rec
@@ -142,14 +142,13 @@ class RerunObserver(RunObserver):
                 static=True)
         rec.log("world/scene/target", rr.LineStrips2D([_closed(self.vehicle.footprint(scene.target))],
                                                       colors=[(230, 180, 0)]), static=True)
-        self._log_plan(segments, static=True)
+        self._log_plan(0.0, segments)
         self._log_vehicle(0.0, world.pose())
         if self.renderer is not None:
             self.renderer.on_start(world, plan, segments)
 
     def on_plan(self, t, plan, segments) -> None:
-        self.rec.set_time("sim_time", duration=t)
-        self._log_plan(segments, static=False)
+        self._log_plan(t, segments)
 
     def _log_vehicle(self, t: float, pose: np.ndarray) -> None:
         self.rec.set_time("sim_time", duration=t)
