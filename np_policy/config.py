@@ -389,8 +389,9 @@ class NeuralParkerConfig:
     ``seed`` and the start pose), ``ACTIONS``."""
     samples: int = 0
     """Sampled rollouts beside the mean rollout; the best of all is returned (0 = the mean rollout only)."""
-    rescue: tuple[RescueRound, ...] = ()
-    """Wider rounds after a failure: (rollouts, standard-deviation scale, first arc 'policy' or 'uniform') each."""
+    rescue: tuple[tuple, ...] = ()
+    """Wider rounds after a failure: (rollouts, standard-deviation scale[, first arc 'policy' (default) or
+    'uniform']) each, kept as full ``RescueRound`` triples (`rescue_round` checks each)."""
     rescue_clearance_m: float = 0.0
     """The rescue rounds also run while the chosen plan's clearance level (the ``weights.margins_m`` ladder) is
     below this (m); 0 = only after a failure."""

@@ -45,12 +45,12 @@ EXPERIMENTS = {"evaluate": (evaluate.main, ["--checkpoints", str(CHECKPOINT)]),
     ("closed_loop", ["--set", "clip_run.track_window=0"],
      "--set clip_run.track_window=0: ClipRunConfig.track_window: expected >= 1 frame, got 0"),
     ("closed_loop", ["--set", "planner.neuralparker_footprint.samples=-1"],
-     "NeuralParkerConfig.samples: expected an integer >= 0, got -1"),
+     "--set planner.neuralparker_footprint.samples=-1: NeuralParkerConfig.samples: expected an integer >= 0, got -1"),
     ("closed_loop", ["--set", "planner.search_margin_m=-0.1"],
-     "PlannerOptions.search_margin_m: expected >= 0 m, got -0.1"),
+     "--set planner.search_margin_m=-0.1: PlannerOptions.search_margin_m: expected >= 0 m, got -0.1"),
     ("closed_loop", ["--set", "planner.neuralparker_footprint.margin_m=NaN"],
-     "NeuralParkerConfig.margin_m: expected a finite number >= 0 m, got nan"),
-    ("closed_loop", ["--set", "controller=pid"], "ClosedLoopConfig.controller: expected one of ['lqr', "),
+     "--set planner.neuralparker_footprint.margin_m=NaN: NeuralParkerConfig.margin_m: expected a finite number >= 0 m"),
+    ("closed_loop", ["--set", "controller=pid"], "--set controller=pid: ClosedLoopConfig.controller: expected one of "),
 ])
 def test_out_of_range_arguments_are_refused_at_parse_time(capsys, tmp_path, experiment, argv, expected):
     main, needed = EXPERIMENTS[experiment]
