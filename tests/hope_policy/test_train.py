@@ -3,6 +3,7 @@ a run writes, and the CLI's refusals (one error line, exit status 2)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -103,3 +104,30 @@ def test_cli_config_file_fields_are_checked(tmp_path, capsys):
     line = one_error_line(capsys, main, ["--out", str(tmp_path / "run"), "--config", str(bad)])
     assert f"{bad}: expected a JSON object" in line
     assert not (tmp_path / "run").exists()
+
+
+def test_collect_stores_the_takeover_chunk_on_takeover_steps_and_the_policy_action_otherwise():
+    from hope_policy.train import HopeTrainer
+
+    config = dataclasses.replace(tiny_config(), num_envs=8, ppo=HopePPOConfig(batch_size=256, minibatch_size=8))
+    trainer = HopeTrainer(config)  # 32 steps of 8 envs: takeovers happen (about one step in sixteen)
+    played, infos = [], []
+    step = trainer.envs.step
+
+    def recording_step(actions):
+        played.append(np.array(actions))
+        result = step(actions)
+        infos.append(result[4])
+        return result
+
+    trainer.envs.step = recording_step
+    roll = trainer.collect()
+    takeover = np.stack([info["rs_takeover"] for info in infos])
+    assert takeover.any() and not takeover.all()
+    chunks = np.stack([info["executed_action"] for info in infos])
+    np.testing.assert_array_equal(roll["action"][takeover], chunks[takeover].astype(np.float32))
+    np.testing.assert_array_equal(roll["action"][~takeover], np.stack(played)[~takeover])
+    with torch.no_grad():  # the stored log-probability is the Gaussian's at the stored action
+        obs = {k: torch.tensor(v[5]) for k, v in roll["obs"].items()}
+        expected = trainer.model.distribution(obs).log_prob(torch.tensor(roll["action"][5])).sum(-1)
+    np.testing.assert_allclose(roll["log_prob"][5], expected.numpy(), rtol=1e-6)
