@@ -277,11 +277,12 @@ def test_overwrite_removes_the_run_files_and_keeps_the_rest(tmp_path):
 
     run = tmp_path / "run"
     run.mkdir()
-    for name in ("metrics.jsonl", "snapshot.pt", "best.pt", "curves.png", "config.json", "notes.txt"):
+    for name in ("metrics.jsonl", "snapshot.pt", "best.pt", "curves.png", "config.json", "notes.txt",
+                 "events.out.tfevents.1796158492.host.11231.0"):
         (run / name).write_text(name)
     with pytest.raises(ConfigError, match="already holds a training run"):
         prepare_run_folder(run, resume=False, overwrite=False)
-    assert len(list(run.iterdir())) == 6
+    assert len(list(run.iterdir())) == 7
     prepare_run_folder(run, resume=False, overwrite=True)
     assert [p.name for p in run.iterdir()] == ["notes.txt"]
     prepare_run_folder(tmp_path / "new", resume=False, overwrite=False)
