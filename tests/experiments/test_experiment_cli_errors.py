@@ -1,5 +1,6 @@
 """Bad arguments to the experiment CLIs (and the tracking and policy benches): one ``error:`` line, exit status 2,
-no traceback; an earlier run's folder is never reused or overwritten; the README's commands still parse."""
+no traceback; an earlier run's folder is never reused or overwritten; the commands of the README and docs/ still
+parse."""
 
 import argparse
 import re
@@ -162,10 +163,15 @@ def test_closed_loop_merges_only_the_recordings_it_names(tmp_path, monkeypatch):
     assert len(calls) == 1 and calls[0][-1] == str(ours) and str(stale) not in calls[0]
 
 
-def readme_commands() -> list[tuple[str, str]]:
-    """(module, arguments) of every complete ``python -m`` command of the README: inline code spans and code-block
+USER_DOCS = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+"""The README and the user docs pages whose commands must parse (not the dated pages under ``docs/results/``: their
+commands are as of their commit)."""
+
+
+def doc_commands(path: Path) -> list[tuple[str, str]]:
+    """(module, arguments) of every complete ``python -m`` command of one page: inline code spans and code-block
     lines, without synopses (``[...]``) or placeholders (``K``, ``SCENE.json``), the trainer and pytest."""
-    text = (REPO / "README.md").read_text()
+    text = path.read_text()
     found = [(m[1], " ".join(m[2].split())) for m in re.finditer(r"`(?:\.venv/bin/)?python -m ([\w.]+)([^`]*)`", text)]
     block = False
     for line in text.splitlines():
@@ -174,7 +180,12 @@ def readme_commands() -> list[tuple[str, str]]:
         if match:
             found.append((match[1], " ".join(match[2].split())))
     skip = re.compile(r"\[|\\|\b(K|M|N|S|k|PATH|PNG)\b|SCENE\.json")
-    return sorted({(m, a) for m, a in found if m not in ("np_policy.train", "pytest") and not skip.search(a)})
+    return [(m, a) for m, a in found if m not in ("np_policy.train", "pytest") and not skip.search(a)]
+
+
+def readme_commands() -> list[tuple[str, str]]:
+    """(module, arguments) of every complete ``python -m`` command of the README and the docs pages, once each."""
+    return sorted({command for page in USER_DOCS for command in doc_commands(page)})
 
 
 def test_the_readme_has_the_commands_this_test_parses():
@@ -185,7 +196,7 @@ def test_the_readme_has_the_commands_this_test_parses():
 
 @pytest.mark.parametrize("module, arguments", readme_commands())
 def test_every_readme_command_still_parses(tmp_path, monkeypatch, module, arguments):
-    """Parse each README command (in a fresh folder, so the README's --out folders are new; the checkpoints it
+    """Parse each README or docs command (in a fresh folder, so its --out folders are new; the checkpoints it
     names linked in, or a stand-in where the README's training creates them) and stop before any work."""
     import importlib
 
