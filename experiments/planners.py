@@ -34,17 +34,18 @@ from np_sim.cli import cli_boundary, fresh_folder, non_negative_int, positive_in
 from np_sim.planners import HybridAStar
 from np_sim.validate import plan_valid, scoring_rule
 
-METHODS = ("hybrid_astar", "np_guided_astar", "ompl_rrtstar", "neuralparker", "staged_astar_np")
+METHODS = ("hybrid_astar", "np_guided_astar", "ompl_rrtstar", "neuralparker", "staged_astar_np", "hope")
 """Planners of the table (`experiments.registry`), in its row order."""
 DEFAULT_CHECKPOINT = Path("checkpoints/factorial_np_seed0.pt")
 
 
 def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | None = DEFAULT_CHECKPOINT,
         convention: str = "reference_point", out: Path | None = None, limit: int | None = None, ompl_seed: int = 0,
-        progress: bool = True) -> dict[str, Any]:
+        progress: bool = True, hope_checkpoint: Path | None = None) -> dict[str, Any]:
     """Plan every frozen start with every method; returns the records, the table text and the run folder."""
-    methods = check_names(METHODS if methods is None else methods, METHODS)
-    options = PlannerOptions(checkpoint=checkpoint, convention=convention, ompl_seed=ompl_seed, benchmark=benchmark)
+    methods = check_names([m for m in METHODS if m != "hope"] if methods is None else methods, METHODS)
+    options = PlannerOptions(checkpoint=checkpoint, convention=convention, ompl_seed=ompl_seed, benchmark=benchmark,
+                             hope_checkpoint=hope_checkpoint)
     planners = build_planners(methods, options)
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
@@ -120,14 +121,18 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
     parser.add_argument("--checkpoint", type=Path, default=DEFAULT_CHECKPOINT,
                         help=f"NeuralParker checkpoint for the learned methods (default {DEFAULT_CHECKPOINT})")
-    parser.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS))
+    parser.add_argument("--methods", nargs="+", choices=METHODS, default=[m for m in METHODS if m != "hope"],
+                        help="planners to run (default all but hope, which needs --hope-checkpoint)")
+    parser.add_argument("--hope-checkpoint", type=Path,
+                        help="adapted-HOPE checkpoint for the hope method (hope_policy.train's final.pt)")
     parser.add_argument("--convention", choices=["reference_point", "footprint"], default="reference_point")
     parser.add_argument("--ompl-seed", type=non_negative_int, default=0, help="OMPL's random seed")
     parser.add_argument("--out", type=fresh_folder,
                         help="new or empty run folder (default: a fresh results/planners/<timestamp>)")
     parser.add_argument("--limit", type=positive_int, help="only the first N frozen episodes (smoke runs)")
     args = parser.parse_args(argv)
-    result = run(args.benchmark, args.methods, args.checkpoint, args.convention, args.out, args.limit, args.ompl_seed)
+    result = run(args.benchmark, args.methods, args.checkpoint, args.convention, args.out, args.limit, args.ompl_seed,
+                 hope_checkpoint=args.hope_checkpoint)
     print(result["table"])
     print(f"records: {result['folder'] / 'records.csv'}")
     return result

@@ -8,18 +8,10 @@ Every planner follows `np_sim.planners.protocol.Planner` (``plan(scene, start) -
 use. Learned planners built together share one loaded policy per checkpoint.
 
 Adding a planner is one entry. Write a factory taking the options and the shared policy loader, importing the
-planner's module inside it (so a CLI loads only what it runs), and add one line to ``REGISTRY``::
-
-    def _hope(options: PlannerOptions, load: PolicyLoader) -> Planner:
-        from hope_policy.planner import HopePlanner
-
-        return HopePlanner.from_checkpoint(required_checkpoint(options.checkpoint, "hope"))
-
-    REGISTRY["hope"] = Entry("HOPE", _hope)   # or one line in the dict literal below
-
-The planner class carries ``name = "hope"`` and its ``convention``; every CLI then offers it in its planner
-choices and labels its rows with the entry's label. A planner that needs a setting the options lack adds one field
-to `PlannerOptions`.
+planner's module inside it (so a CLI loads only what it runs), and add one line to ``REGISTRY`` (the adapted HOPE
+entry, ``_hope``, is an example). The planner class carries ``name`` and its ``convention``; every CLI then offers it
+in its planner choices and labels its rows with the entry's label. A planner that needs a setting the options lack
+adds one field to `PlannerOptions`.
 """
 
 from __future__ import annotations
@@ -57,6 +49,8 @@ class PlannerOptions:
     """Hybrid A* and NP-Guided A*'s search plan for the footprint grown by this on every side (m)."""
     ompl_seed: int = 0
     """OMPL's random seed."""
+    hope_checkpoint: Path | None = None
+    """Checkpoint of 'hope', the adapted HOPE baseline (`hope_policy.train`'s ``final.pt``)."""
     benchmark: str | None = None
     """The scenes the planners will plan ('factorial', 'topology', 'examples', 'site'): a checkpoint of another
     observation layout is refused when loaded; None checks nothing."""
@@ -141,6 +135,12 @@ def _neuralparker_footprint(options: PlannerOptions, load: PolicyLoader) -> Plan
     return NeuralParkerPlanner(load(path), options.neuralparker_footprint)
 
 
+def _hope(options: PlannerOptions, load: PolicyLoader) -> Planner:
+    from hope_policy.planner import HopePlanner
+
+    return HopePlanner.from_checkpoint(required_checkpoint(options.hope_checkpoint, "hope", "--hope-checkpoint PATH"))
+
+
 REGISTRY: dict[str, Entry] = {
     "hybrid_astar": Entry("Hybrid A*", _hybrid_astar),
     "np_guided_astar": Entry("NP-Guided A*", _np_guided_astar),
@@ -148,6 +148,7 @@ REGISTRY: dict[str, Entry] = {
     "neuralparker": Entry("NeuralParker", _neuralparker),
     "neuralparker_footprint": Entry("NeuralParker (footprint)", _neuralparker_footprint),
     "staged_astar_np": Entry("Hybrid A* → NP", _staged_astar_np),
+    "hope": Entry("Adapted HOPE", _hope),
 }
 """Every planner kind by name (module docstring: how to add one)."""
 
