@@ -40,9 +40,6 @@ import dataclasses
 import json
 import math
 import multiprocessing
-import shutil
-import subprocess
-import sys
 import time
 from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
@@ -59,6 +56,7 @@ from experiments.registry import PlannerOptions, build_planners, check_names, la
 from np_sim.cli import cli_boundary, fresh_folder, positive_int
 from np_sim.errors import ConfigError
 from tracking.clip_run import ClipRunConfig
+from tracking.rerun_log import merge_recordings
 
 PLANNERS = ("neuralparker", "neuralparker_footprint", "np_guided_astar", "hybrid_astar")
 """Planners of the table, in the paper's row order (the footprint-aware NeuralParker after the paper-faithful one)."""
@@ -367,16 +365,9 @@ def rrd_path(rrd_dir: Path, clip_name: str, planner: str) -> Path:
 
 
 def merge_rrd(files: list[Path], out: Path) -> Path | None:
-    """Merge the given per-run ``.rrd`` files (this run's only) into one file with ``rerun rrd merge``; None when
-    there are none."""
-    if not files:
-        return None
-    exe = Path(sys.executable).parent / "rerun"
-    exe = str(exe) if exe.exists() else shutil.which("rerun")
-    if exe is None:
-        raise FileNotFoundError("merge_rrd: the 'rerun' command is missing; install rerun-sdk into the venv")
-    subprocess.run([exe, "rrd", "merge", "-o", str(out), *map(str, files)], check=True, capture_output=True)
-    return out
+    """Merge the given per-run ``.rrd`` files (this run's only) into one optimised file with the viewer layout
+    (`tracking.rerun_log.merge_recordings`); None when there are none."""
+    return merge_recordings(files, out) if files else None
 
 
 @cli_boundary
