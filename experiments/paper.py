@@ -375,7 +375,8 @@ NOTES = {
                            "([sweep.md](sweep.md)).",
     HERMITE.label: "Fixed Hermite and Ensemble, eval. only are the same fixed-connector checkpoints, evaluated with "
                    "their own connector and with the ensemble swapped in "
-                   "(`python -m experiments.evaluate --connector ensemble`).",
+                   "(`python -m experiments.evaluate --checkpoints a.pt [b.pt c.pt] --connector ensemble`, one file "
+                   "per seed).",
     CURRICULUM.label: "The rows differ only in the start ordering: without the curriculum the same start pool is "
                       "sampled in full from the first epoch ([sweep.md](sweep.md)).",
 }
