@@ -283,7 +283,7 @@ class Trainer:
         optimiser, schedule and counters start fresh."""
         payload = load_checkpoint(path)
         own = self.config.to_dict()
-        theirs = payload["config"]
+        theirs = checkpoint_config(path, payload).to_dict()  # fields added since it was saved take their defaults
         diffs = config_differences(
             {"network": own["network"], "observation": own["env"]["observation"]},
             {"network": theirs.get("network"), "observation": theirs.get("env", {}).get("observation")})

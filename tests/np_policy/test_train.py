@@ -428,3 +428,14 @@ def test_no_tensorboard_writes_no_events_and_a_later_logging_resume_fills_them_i
     train(config, run, epochs=3, resume=True, progress=False)
     _assert_events_equal_metrics(run)
     assert [step for step, _ in _scalars(run)["policy_loss"]] == [1, 2, 3]
+
+
+def test_init_from_a_checkpoint_saved_before_newer_config_fields_existed():
+    """The shipped Factorial checkpoint predates the BEV observation fields: they take their defaults (off) and the
+    warm start loads its weights."""
+    source = "checkpoints/factorial_np_seed0.pt"
+    stored = load_checkpoint(source)
+    assert "use_bev" not in stored["config"]["env"]["observation"]
+    trainer = Trainer(TrainConfig.from_dict(benchmark_defaults("factorial")), "unused")
+    trainer.initialize_from(source)
+    assert all(torch.equal(stored["model"][k], v) for k, v in trainer.model.state_dict().items())
