@@ -1,1 +1,1 @@
-"""One module per paper table or figure; each prints a table and writes CSV/JSON + plots (SPEC §9)."""
+"""One module per paper table or figure; each prints a table and writes CSV/JSON + plots (spec §9)."""

@@ -1,5 +1,5 @@
 """The real-vehicle study in closed loop: the 47 held-out site clips driven in MuJoCo by each planner (paper §V-F,
-Table ``tab:realworld``, App. C, Fig. ``fig:searchtime``; SPEC §8).
+Table ``tab:realworld``, App. C, Fig. ``fig:searchtime``; spec §8).
 
 ``python -m experiments.closed_loop --clips [--split eval|train-difficult] [--clips-limit N | --clip-names NAME ...]
 [--planners neuralparker neuralparker_footprint np_guided_astar hybrid_astar] [--checkpoint PATH] [--no-render]

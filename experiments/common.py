@@ -1,4 +1,4 @@
-"""Shared pieces of the experiment CLIs: run folders, records, paper-style aggregation (SPEC §9)."""
+"""Shared pieces of the experiment CLIs: run folders, records, paper-style aggregation (spec §9)."""
 
 from __future__ import annotations
 

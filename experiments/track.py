@@ -1,4 +1,4 @@
-"""Closed-loop tracking of planned paths on the benchmark frozen starts (SPEC §8).
+"""Closed-loop tracking of planned paths on the benchmark frozen starts (spec §8).
 
 ``python -m experiments.track --benchmark factorial --planner hybrid_astar [--convention footprint]
 [--per-scene K] [--limit N] [--controller lqr|stanley|pure_pursuit|all] [--rrd-episodes N] [--no-render]

@@ -1,4 +1,4 @@
-"""The adapted HOPE baseline (paper §IV-B, App. B; SPEC §7): its environment on the project's arc kinematics,
+"""The adapted HOPE baseline (paper §IV-B, App. B; spec §7): its environment on the project's arc kinematics,
 HOPE's action mask, reward and Reeds–Shepp takeover, and the HOPE-style representation variants.
 
 Dependencies point one way: ``np_sim`` ← ``np_policy`` ← ``hope_policy``.

@@ -51,7 +51,7 @@ def anchor_actions() -> np.ndarray:
 
 def anchor_poses(config: HopeEnvConfig) -> np.ndarray:
     """(42, n, 3) poses (x, y, θ) of each anchor's sweep from the origin at arc lengths s_k = k·v·T/n, k = 1..n
-    (v = HOPE's mask speed), on the arc of steering angle δ_j (curvature tan δ_j / wheelbase, SPEC §2 signs)."""
+    (v = HOPE's mask speed), on the arc of steering angle δ_j (curvature tan δ_j / wheelbase, spec §2 signs)."""
     n = config.mask_iterations
     a = anchor_actions()
     c = np.tan(a[:, 0] * config.max_steer_rad) / config.vehicle.wheelbase_m

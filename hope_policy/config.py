@@ -1,4 +1,4 @@
-"""Configuration of the adapted HOPE environment (paper §IV-B, App. B "Adaptation of HOPE"; SPEC §7).
+"""Configuration of the adapted HOPE environment (paper §IV-B, App. B "Adaptation of HOPE"; spec §7).
 
 Defaults are HOPE's published numbers (``jiamiya/HOPE`` ``src/configs.py``) with the paper's three task-side
 changes: hard reference-point collision and boundary termination, Reeds–Shepp candidates checked under the

@@ -1,4 +1,4 @@
-"""Gymnasium environments of the adapted HOPE baseline (paper §IV-B, App. B; SPEC §7).
+"""Gymnasium environments of the adapted HOPE baseline (paper §IV-B, App. B; spec §7).
 
 ## Description
 HOPE's task on the project's benchmark scenes: the agent holds a steering angle δ and a speed v for HOPE's rollout

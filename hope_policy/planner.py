@@ -1,4 +1,4 @@
-"""The adapted HOPE as a planner (paper §IV-B, App. ``app:hope-adaptation``; SPEC §7).
+"""The adapted HOPE as a planner (paper §IV-B, App. ``app:hope-adaptation``; spec §7).
 
 ``HopePlanner.from_checkpoint(path).plan(scene, start) -> Plan`` plays the trained policy deterministically in the
 environment it was trained in (``HopeParkingEnv`` with the checkpoint's ``HopeEnvConfig``): observations normalised

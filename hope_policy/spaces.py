@@ -1,4 +1,4 @@
-"""Observation and action spaces of the adapted HOPE environment (paper App. B; SPEC §7): the contract between the
+"""Observation and action spaces of the adapted HOPE environment (paper App. B; spec §7): the contract between the
 environment (``hope_policy.env``) and the agent.
 
 Observation: a ``Dict`` with
@@ -73,7 +73,7 @@ def action_to_arc(actions, config: HopeEnvConfig) -> np.ndarray:
 
     δ = a_0 · δ_max, v = a_1 · v_max held for T = rollout_s drive the kinematic bicycle θ' = v tan δ / L on a
     circle of physical curvature c = tan δ / L over the signed length l = v · T; in the project's convention
-    (SPEC §2, heading change −sgn(κ)|lκ|) that is the arc κ = −sgn(l) · c, l = v · T.
+    (spec §2, heading change −sgn(κ)|lκ|) that is the arc κ = −sgn(l) · c, l = v · T.
     """
     a = np.asarray(actions, float)
     steer_curvature = np.tan(a[..., 0] * config.max_steer_rad) / config.vehicle.wheelbase_m

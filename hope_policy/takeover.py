@@ -66,7 +66,7 @@ def all_words(x: float, y: float, phi: float, letters: np.ndarray, lengths: np.n
 def candidate_arcs(x0: float, y0: float, th0: float, target: np.ndarray, kappa_max: float, arcs: np.ndarray,
                    counts: np.ndarray, totals: np.ndarray) -> int:
     """All RS candidates from (x0, y0, θ0) to ``target`` as eq:arc arcs (κ, l) into ``arcs`` (48, 5, 2): a piece of
-    letter c and normalised length u is l = u/κ_max, κ = −sgn(l)·c·κ_max (SPEC §2); ``totals`` their lengths (m)."""
+    letter c and normalised length u is l = u/κ_max, κ = −sgn(l)·c·κ_max (spec §2); ``totals`` their lengths (m)."""
     x, y, phi = relative_goal(x0, y0, th0, target[0], target[1], target[2], kappa_max)
     letters = np.empty((MAX_WORDS, MAX_PIECES), np.int64)
     lengths = np.empty((MAX_WORDS, MAX_PIECES))

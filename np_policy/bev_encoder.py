@@ -1,5 +1,5 @@
 """The frozen convolutional autoencoder of the BEV controls and its pretraining (paper App. B, "Controlled
-Representation Inputs"; SPEC §7).
+Representation Inputs"; spec §7).
 
 Architecture (paper: 4- and 8-channel conv stages, a 256-D fully connected layer, a 128-D latent; the stage
 layout is HOPE's published image encoder, ``jiamiya/HOPE``, written anew here):

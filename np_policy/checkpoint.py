@@ -1,4 +1,4 @@
-"""NeuralParker checkpoints: weights, the complete training config and normalisation statistics (SPEC §6).
+"""NeuralParker checkpoints: weights, the complete training config and normalisation statistics (spec §6).
 
 Format ``neuralparker-checkpoint-v2``: a ``torch.save`` file holding only tensors and plain data (dicts, lists,
 tuples, str, int, float, bool, None), so it is read with ``torch.load(weights_only=True)`` and a crafted file

@@ -1,4 +1,4 @@
-"""Configuration of the NeuralParker policy network and its PPO recipe (paper App. A Tables IV and V, SPEC §6).
+"""Configuration of the NeuralParker policy network and its PPO recipe (paper App. A Tables IV and V, spec §6).
 
 Defaults are the paper's numbers. The recipe's names (epochs, steps per epoch, steps per collect, repeats, batch)
 are those of Tianshou's on-policy trainer, whose semantics the PPO here reproduces: each epoch collects
@@ -256,7 +256,7 @@ class TrainConfig:
     curriculum_pool: int = 256
     """Start poses per scene in the geodesic curriculum pool."""
     curriculum_region: str = "start_region"
-    """Where the curriculum pool is drawn: 'start_region' (each scene's start region, SPEC §5's reading of the
+    """Where the curriculum pool is drawn: 'start_region' (each scene's start region, spec §5's reading of the
     paper's "5 % of the available range") or, beyond that reading, 'lot' (anywhere in the scene's drivable lot
     that is connected to the target, so the nearest 5 % start next to the bay; a reverse curriculum in the sense
     of Florensa et al. 2017). Selection episodes keep the start regions either way."""
@@ -347,7 +347,7 @@ def check_benchmark_layout(path: str | Path, config: TrainConfig, benchmark: str
 
 
 ACTIONS = ("mean", "sample")
-"""How a NeuralParker planner acts: the policy's mean action (the paper's planner, SPEC §7) or one sampled action
+"""How a NeuralParker planner acts: the policy's mean action (the paper's planner, spec §7) or one sampled action
 per arc (each arc ``clip(μ(o) + σ·ε, −1, 1)``: what a Tianshou PPO policy plays at test time unless it is built
 with ``deterministic_eval=True``)."""
 
@@ -441,7 +441,7 @@ class NeuralParkerConfig:
 
 
 PAPER = NeuralParkerConfig()
-"""The paper's planner (§III-A, SPEC §7): the policy's mean action rolled out once, the checkpoint's connector."""
+"""The paper's planner (§III-A, spec §7): the policy's mean action rolled out once, the checkpoint's connector."""
 
 FOOTPRINT_BEST_OF_N = NeuralParkerConfig(
     connector="centred", samples=32, rescue=((128, 2.0, "policy"), (128, 3.0, "policy"), (128, 1.0, "uniform")),
@@ -457,7 +457,7 @@ executed footprint success, standard error about 0.04: mean action only 0.59; be
 length cost and 0.83 with the drive-time cost, of 64 0.78; noise σ × 1.5 0.82, × 0.7 0.78; the centred connector
 order 0.82 (neutral here; chosen from the near-target cycles of three held-out clips, where the paper's order ends
 plans on the edge of the 10° parking tolerance); the two policy rescue rounds 0.86 (256 rollouts each: 0.86); the
-rescue for clearance below 0.2 m 0.89 (0.1 m: 0.91 vs 0.93 with ``--stitch --track-window 5``); the third round
+rescue for clearance below 0.2 m 0.89 (0.1 m: 0.91 vs 0.93 with ``--set clip_run.stitch=true clip_run.track_window=5``); the third round
 with uniform first arcs 0.90 (64 rollouts or 2 σ: 0.89). ``docs/planners.md`` has the whole table."""
 
 PRESETS: dict[str, NeuralParkerConfig] = {"paper": PAPER, "footprint_best_of_n": FOOTPRINT_BEST_OF_N}

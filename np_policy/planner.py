@@ -1,4 +1,4 @@
-"""The NeuralParker planner: policy rollouts with the terminal connector in the loop (SPEC §7).
+"""The NeuralParker planner: policy rollouts with the terminal connector in the loop (spec §7).
 
 ``NeuralParkerPlanner.from_checkpoint(path, config).plan(scene, start) -> Plan`` plays the policy in the same
 environment it was trained in (the checkpoint's ``EnvConfig``), so arcs, collision checks, the heading gate and

@@ -1,4 +1,4 @@
-"""PPO pieces with Tianshou semantics, as pure functions the trainer composes (SPEC §6, paper Table V).
+"""PPO pieces with Tianshou semantics, as pure functions the trainer composes (spec §6, paper Table V).
 
 Phases of one update (the trainer calls them in this order):
 

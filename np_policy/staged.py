@@ -1,4 +1,4 @@
-"""Learned-classical hybrids on the Plan interface (SPEC §7): NP-Guided A* and the staged Hybrid A* → learned planner.
+"""Learned-classical hybrids on the Plan interface (spec §7): NP-Guided A* and the staged Hybrid A* → learned planner.
 
 * ``NPGuidedAStar`` (paper §IV-B, §V-F): the NeuralParker policy is rolled out once from the query; its path
   (sampled positions, kept up to a collision when the rollout fails) is the guide of ``HybridAStar.plan``, whose

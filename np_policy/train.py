@@ -5,7 +5,7 @@
 One run reads top to bottom: build the batched env on the training scenes with the geodesic start curriculum
 and the in-loop Hermite ensemble, then per epoch collect 16,384 transitions at a time from the 128 training envs
 until at least 60,000 steps are in, after each collect run 10 shuffled passes of minibatches of 8,192
-(Tianshou's on-policy trainer semantics, SPEC §6), then score 32 full-range training-distribution episodes
+(Tianshou's on-policy trainer semantics, spec §6), then score 32 full-range training-distribution episodes
 with the deterministic policy for checkpoint selection (never a frozen evaluation episode). Every epoch appends
 a line to ``metrics.jsonl`` (statistics, and its wall-clock split into ``collect_s``, ``update_s`` and
 ``selection_s``) and redraws ``curves.png``; TensorBoard event files beside it hold the same scalars

@@ -195,7 +195,7 @@ def bench_kernels(scenes, config, seed: int) -> dict[str, float]:
 
 
 def run(seconds: float = 3.0, num_envs: int = 128, seed: int = 0) -> dict[str, float]:
-    """All measurements as a dict (keys of SPEC §10 included)."""
+    """All measurements as a dict (keys of spec §10 included)."""
     scenes = example_scenes()
     config = EnvConfig()
     result = {"num_envs": num_envs}

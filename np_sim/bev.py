@@ -1,5 +1,5 @@
 """Ego-aligned bird's-eye-view (BEV) raster of a parking scene (paper App. B, "Controlled Representation Inputs";
-SPEC §7): the image input of the BEV controls of the scene-representation ablation.
+spec §7): the image input of the BEV controls of the scene-representation ablation.
 
 Two calls, both returning RGB images as ``uint8`` arrays, channels first (divide by 255 for the network input)::
 

@@ -1,4 +1,4 @@
-"""Path validity under the two collision conventions (SPEC §2), over the compiled kernels.
+"""Path validity under the two collision conventions (spec §2), over the compiled kernels.
 
 * ``"reference_point"`` (paper): every sampled reference point strictly inside the boundary and strictly outside
   every obstacle;

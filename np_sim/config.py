@@ -1,4 +1,4 @@
-"""Configuration dataclasses of the planning environment (SPEC §5). Defaults are the paper's numbers.
+"""Configuration dataclasses of the planning environment (spec §5). Defaults are the paper's numbers.
 
 Every paper ablation is a ``dataclasses.replace`` of these (no LiDAR, fixed vs ensemble connector,
 footprint vs reference-point checks), never a fork. ``from_dict`` rejects unknown keys.

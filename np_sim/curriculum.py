@@ -1,5 +1,5 @@
 """Geodesic start curriculum (paper §III-E, App. A Table V "curriculum start scale / distance: 0.05 / geodesic";
-SPEC §5 curriculum paragraph).
+spec §5 curriculum paragraph).
 
 **Candidate starts.** For each scene, a pool of ``pool_size`` start poses is drawn once from the full-range
 `UniformStartSampler` (uniform position in the start region, uniform heading, footprint-free) with its own

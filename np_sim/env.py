@@ -1,4 +1,4 @@
-"""Gymnasium environments of the NeuralParker arc-planning task (paper §III, SPEC §5).
+"""Gymnasium environments of the NeuralParker arc-planning task (paper §III, spec §5).
 
 ## Description
 The agent plans a parking manoeuvre as a sequence of curvature–length arcs. Each arc is executed with the
@@ -7,7 +7,7 @@ arc that does not end at the target, the in-loop Hermite terminal connector (81-
 nine) tries to finish the manoeuvre when the reached heading faces the target (sin θ̃ > 0).
 
 ## Action space
-``Box(-1, 1, (2,), float32)``, mapped linearly: κ = a_0 · 0.68 (1/m; positive = heading decreases, SPEC §2),
+``Box(-1, 1, (2,), float32)``, mapped linearly: κ = a_0 · 0.68 (1/m; positive = heading decreases, spec §2),
 l = a_1 · 10 (m; sign = gear). Actions outside the box raise (the env never clips).
 
 ## Observation space

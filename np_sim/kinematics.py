@@ -1,4 +1,4 @@
-"""Arc kinematics of the NeuralParker action (paper eq:arc, SPEC §2).
+"""Arc kinematics of the NeuralParker action (paper eq:arc, spec §2).
 
 Under eq:arc the heading changes by −sgn(κ)·|lκ| whatever the gear, so the *physical* steering curvature a
 tracker must command (positive = left turn) is ``steer_curvature = −sgn(l)·κ``. The arc (κ, l) is retraced
@@ -36,5 +36,5 @@ def sample_arc(pose, kappa: float, length: float, n: int = 30) -> np.ndarray:
 
 
 def steer_curvature(kappa, length):
-    """Physical steering curvature c = −sgn(l)·κ (positive = left) of the arc (κ, l) (SPEC §2)."""
+    """Physical steering curvature c = −sgn(l)·κ (positive = left) of the arc (κ, l) (spec §2)."""
     return -np.sign(length) * np.asarray(kappa, dtype=float)

@@ -1,7 +1,7 @@
-"""The plan every planner returns (SPEC §7, §10): executed arcs, at most one terminal Hermite segment, timing.
+"""The plan every planner returns (spec §7, §10): executed arcs, at most one terminal Hermite segment, timing.
 
 A tracker consumes ``Plan.sample(ds)``: rows (x, y, θ, steer_curvature, gear, s) with the physical steering
-curvature of SPEC §2 (positive = left; for an arc ``−sgn(l)·κ``), gear ±1 and the travelled distance s.
+curvature of spec §2 (positive = left; for an arc ``−sgn(l)·κ``), gear ±1 and the travelled distance s.
 """
 
 from __future__ import annotations
@@ -101,7 +101,7 @@ class Plan:
         xy, d1, d2 = _cubic_derivatives(c, np.interp(u, cum, t_fine))
         travel = np.arctan2(d1[:, 1], d1[:, 0])
         heading = np.remainder(travel + (0.0 if gear > 0 else math.pi) + math.pi, 2 * math.pi) - math.pi
-        # signed geometric curvature of the travelled curve (left positive); steering = gear × that (SPEC §2)
+        # signed geometric curvature of the travelled curve (left positive); steering = gear × that (spec §2)
         curvature = (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) / np.maximum(np.hypot(*d1.T), 1e-12) ** 3
         return np.column_stack([xy, heading, gear * curvature, np.full(n + 1, gear), s0 + u])
 

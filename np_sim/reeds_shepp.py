@@ -1,4 +1,4 @@
-"""Reeds–Shepp shortest paths as action arcs (Reeds & Shepp 1990; SPEC §7, §10).
+"""Reeds–Shepp shortest paths as action arcs (Reeds & Shepp 1990; spec §7, §10).
 
 ``shortest_length(start, goal, kappa_max)`` is the length (m) of the shortest forward/reverse path of curvature
 at most κ_max between two poses; ``shortest_path(start, goal, kappa_max)`` returns that path as (T, 2) arcs (κ, l)
@@ -45,7 +45,7 @@ def shortest_path(start, goal, kappa_max: float) -> np.ndarray:
     """The shortest Reeds–Shepp path as (T, 2) arcs (κ, l) of paper eq:arc, T ≤ 5, in driving order.
 
     Each piece of physical steering c ∈ {left, straight, right} and signed length l (sign = gear) is the arc
-    κ = −sgn(l)·c·κ_max (SPEC §2), so ``arc_step`` applied piece by piece from ``start`` ends at ``goal``.
+    κ = −sgn(l)·c·κ_max (spec §2), so ``arc_step`` applied piece by piece from ``start`` ends at ``goal``.
     """
     out = np.empty((MAX_PIECES, 2))
     n = rs_arcs_into(*_pose("start", start), *_pose("goal", goal), _kappa(kappa_max), MIN_PIECE_M, out)

@@ -1,4 +1,4 @@
-"""Scenes: boundary, obstacles, target pose and start region, with their JSON format and validation (SPEC §4, §10).
+"""Scenes: boundary, obstacles, target pose and start region, with their JSON format and validation (spec §4, §10).
 
 A scene is stored in the world frame as one JSON object::
 
@@ -119,7 +119,7 @@ Obstacle = PolygonObstacle | CircleObstacle
 
 @dataclass(frozen=True)
 class SceneCapacity:
-    """The NeuralParker observation limits a scene must fit (SPEC §4); limits of the observation, not of the format."""
+    """The NeuralParker observation limits a scene must fit (spec §4); limits of the observation, not of the format."""
 
     max_obstacles: int = 20
     """Most obstacles the observation encodes."""
@@ -131,7 +131,7 @@ class SceneCapacity:
 
 @dataclass(frozen=True, eq=False)
 class Scene:
-    """One parking scene in the world frame (SPEC §4).
+    """One parking scene in the world frame (spec §4).
 
     Construct with `Scene.from_dict` or `Scene.load`, which validate; direct construction only normalises the
     arrays (float64, read-only, exact repeats and closing vertices of polygons dropped) and checks their shapes —
@@ -185,7 +185,7 @@ class Scene:
         vehicle: VehicleSpec | None = None,
         capacity: SceneCapacity | None = None,
     ) -> Scene:
-        """Build and validate a scene from its JSON-shaped dict (SPEC §10).
+        """Build and validate a scene from its JSON-shaped dict (spec §10).
 
         Parameters
         ----------

@@ -20,7 +20,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="python -m np_sim.show",
         description=(
-            "Validate a scene JSON file (SPEC §10) and draw it to a PNG: boundary, obstacles, start region "
+            "Validate a scene JSON file (spec §10) and draw it to a PNG: boundary, obstacles, start region "
             "(hatched), the target as a T-marker (bar across the pose, stem along the heading) with the vehicle "
             "footprint, and an optional path. Prints where the PNG went."
         ),

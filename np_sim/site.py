@@ -1,4 +1,4 @@
-"""The delivery site: one irregular parking area and its assigned parking spots (SPEC §4.4, paper §V-F, App. C).
+"""The delivery site: one irregular parking area and its assigned parking spots (spec §4.4, paper §V-F, App. C).
 
 The site stands in for the paper's real-vehicle site (a delivery-vehicle parking area whose static boundary is
 50 HD-map polylines), which we cannot record. It is one simple polygon of `SiteConfig.n_edges` = 50 edges,

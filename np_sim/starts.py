@@ -22,7 +22,7 @@ class StartSampler(Protocol):
 
 
 class UniformStartSampler:
-    """Full-range sampler (SPEC §4.3): position uniform over the start region (default: the boundary) by
+    """Full-range sampler (spec §4.3): position uniform over the start region (default: the boundary) by
     rejection, heading uniform in [−π, π), kept only when the whole footprint is free.
 
     Each request draws blocks of ``block`` uniform triples (x, y, θ) from the caller's generator, all requests'

@@ -1,4 +1,4 @@
-"""One plan validator with three rules, selectable by name (SPEC §2 conventions, paper eq:arc, eq:hermite).
+"""One plan validator with three rules, selectable by name (spec §2 conventions, paper eq:arc, eq:hermite).
 
 * ``"paper"``: the benchmark's scoring rule for the reference-point convention, the env's own check: the
   reference point at the ``samples_per_arc`` poses l·j/n, j = 1..n, of each arc (the compiled ``arc_valid`` the env

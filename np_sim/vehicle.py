@@ -1,4 +1,4 @@
-"""The vehicle: the single source of footprint and steering geometry for every module (SPEC §3)."""
+"""The vehicle: the single source of footprint and steering geometry for every module (spec §3)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """A plain, per-step reference implementation of one NeuralParker environment step (test oracle).
 
-Written from the paper (``neuralparker.tex`` §III, Algorithm 1, App. A) and SPEC §2/§5 the way a per-step
+Written from the paper (``neuralparker.tex`` §III, Algorithm 1, App. A) and spec §2/§5 the way a per-step
 research environment (such as HOPE's) does it: Python loops, numpy and shapely predicates, no numba and no
 code shared with ``np_sim.kernels``. It is the oracle the compiled ``np_sim.env.ParkingVectorEnv`` is compared
 against in ``tests/np_sim/test_env_reference.py``.
@@ -36,7 +36,7 @@ TWO_PI = 2.0 * math.pi
 
 # ---------------------------------------------------------------------------------------------------- basics
 def wrap(a: float) -> float:
-    """Wrap an angle to (−π, π] (SPEC §2)."""
+    """Wrap an angle to (−π, π] (spec §2)."""
     return a - TWO_PI * math.ceil((a - math.pi) / TWO_PI)
 
 
@@ -94,7 +94,7 @@ def pose_to_target(pose, target) -> tuple[float, float, float]:
 
 # ---------------------------------------------------------------------------------------------------- collision
 class Checker:
-    """Shapely geometry of a scene and the two collision conventions (SPEC §2)."""
+    """Shapely geometry of a scene and the two collision conventions (spec §2)."""
 
     def __init__(self, scene, vehicle):
         self.scene = scene

@@ -1,4 +1,4 @@
-"""Closed-loop validation in MuJoCo (SPEC §8): vehicle model, scene worlds, reference paths, path-tracking
+"""Closed-loop validation in MuJoCo (spec §8): vehicle model, scene worlds, reference paths, path-tracking
 controllers, the executor, planned-path validators and Rerun logging.
 
 ```python

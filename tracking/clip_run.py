@@ -1,4 +1,4 @@
-"""One site clip in closed loop (SPEC §8 "Closed loop on a clip"; paper §V-F, App. C, Table ``tab:realworld``).
+"""One site clip in closed loop (spec §8 "Closed loop on a clip"; paper §V-F, App. C, Table ``tab:realworld``).
 
 The MuJoCo world is the clip's ground truth: the site boundary as walls, the static objects extruded, the movers
 (pedestrians, pushed carts) as mocap bodies following their recorded poses (`tracking.movers`). The vehicle starts
@@ -266,7 +266,7 @@ def _waiting_contacts(ground: ClipWorld, start: np.ndarray, times: np.ndarray, v
 
 
 class ReplanningLoop:
-    """The planner side of a clip run (SPEC §8 "Closed loop on a clip"; module docstring): the first plan and its
+    """The planner side of a clip run (spec §8 "Closed loop on a clip"; module docstring): the first plan and its
     retries at the start (`first_plan`), the replan decision at each frame (`replan`, the executor's ``replan``
     hook) and stitching (`stitched`).
 

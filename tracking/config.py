@@ -201,7 +201,7 @@ class TrackerConfig:
     """Everything the executor uses; `from_dict` rejects unknown keys."""
 
     vehicle: VehicleSpec = field(default_factory=VehicleSpec)
-    """Footprint, wheelbase and curvature bound (the single source, SPEC §3)."""
+    """Footprint, wheelbase and curvature bound (the single source, spec §3)."""
     model: VehicleModelConfig = field(default_factory=VehicleModelConfig)
     """MJCF physics beyond the spec."""
     world: WorldConfig = field(default_factory=WorldConfig)

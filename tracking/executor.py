@@ -1,4 +1,4 @@
-"""The closed-loop executor (SPEC §8, §10): a plan, or a planner replanning at a fixed rate, driven on the MuJoCo
+"""The closed-loop executor (spec §8, §10): a plan, or a planner replanning at a fixed rate, driven on the MuJoCo
 vehicle by a path-tracking controller until parked, body contact or timeout.
 
 ```python

@@ -1,4 +1,4 @@
-"""The vehicle MJCF, filled from `VehicleSpec` and `VehicleModelConfig` (SPEC §3, §8), and its Ackermann geometry.
+"""The vehicle MJCF, filled from `VehicleSpec` and `VehicleModelConfig` (spec §3, §8), and its Ackermann geometry.
 
 ``python -m tracking.mjcf [-o FILE]`` writes the default vehicle as a loadable MJCF (for the MuJoCo viewer).
 """

@@ -1,4 +1,4 @@
-"""Moving ground-truth objects of a clip (SPEC §4.4, §8): pedestrians and pushed carts as kinematic bodies.
+"""Moving ground-truth objects of a clip (spec §4.4, §8): pedestrians and pushed carts as kinematic bodies.
 
 A `Mover` holds an object's outline in its own frame and its recorded 10 Hz poses; `Mover.pose_at(t)` is the pose
 at sim time ``t``: linear interpolation between the two frames around ``t`` (the heading along the shorter way

@@ -1,10 +1,10 @@
-"""The perception model of the closed loop on a clip (SPEC §8 "Closed loop on a clip"; beyond the paper): which
+"""The perception model of the closed loop on a clip (spec §8 "Closed loop on a clip"; beyond the paper): which
 detections the planner gets at a frame.
 
 The paper's vehicle planned on each frame's raw detections (`np_sim.clips.Clip.frame_scene`, a window of one
 frame). `tracked_detections` filters them over the last K received frames, one track per object id, and
 `perceived_scene` turns either into the scene the planner plans in (``ClipRunConfig.track_window``,
-``--track-window K`` of ``python -m experiments.closed_loop --clips``).
+``--set clip_run.track_window=K`` of ``python -m experiments.closed_loop --clips``).
 """
 
 from __future__ import annotations

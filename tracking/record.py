@@ -27,7 +27,7 @@ class Contact:
 
 @dataclass
 class ExecutionRecord:
-    """Result of `tracking.executor.execute` (SPEC §8, §10)."""
+    """Result of `tracking.executor.execute` (spec §8, §10)."""
 
     success: bool
     """No body contact and parked within the executor's tolerance of the scene target."""

@@ -1,6 +1,6 @@
 """Plan → reference path: gear segments of dense samples with physical steering curvature and a speed profile.
 
-A plan's samples (``Plan.sample``: x, y, θ, steer_curvature c = −sgn(l)·κ, gear, s; SPEC §2) are cut at every cusp
+A plan's samples (``Plan.sample``: x, y, θ, steer_curvature c = −sgn(l)·κ, gear, s; spec §2) are cut at every cusp
 (gear change) into segments; each segment gets a speed profile that starts at rest (or at the given start speed)
 and ends at rest, bounded by the gear's cruise speed, the lateral acceleration v²·|c| ≤ a_lat, the steering rate
 (a steering change Δδ over a window W of path is driven in at least Δδ / rate seconds, so v ≤ rate·W / Δδ) and the

@@ -1,7 +1,7 @@
 """Off-screen frames of a world from the top-down and chase cameras.
 
 MuJoCo picks its OpenGL backend from ``MUJOCO_GL`` when it is first imported; `tracking/__init__.py` defaults it
-to ``egl`` (CPU rendering through Mesa's software EGL, SPEC §8) before anything imports mujoco.
+to ``egl`` (CPU rendering through Mesa's software EGL, spec §8) before anything imports mujoco.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Planned-path validators (SPEC §8, paper Table VI) over the one plan validator, `np_sim.validate`.
+"""Planned-path validators (spec §8, paper Table VI) over the one plan validator, `np_sim.validate`.
 
 * reference point: the paper's rule, the env's own check (30 reference points per arc, the 100 Hermite samples);
 * footprint: the full vehicle rectangle at the same samples (the footprint convention as the env scores it);

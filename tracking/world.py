@@ -1,4 +1,4 @@
-"""A scene as a MuJoCo world (SPEC §8): ground, extruded obstacles, circle cylinders, boundary walls, the vehicle.
+"""A scene as a MuJoCo world (spec §8): ground, extruded obstacles, circle cylinders, boundary walls, the vehicle.
 
 Geom names say what a contact touched: ``obstacle_<i>`` (or ``obstacle_<i>_<k>`` for the k-th convex piece of a
 non-convex obstacle ``i`` in scene order), ``wall_<e>_<k>`` for boundary edge ``e`` (vertex e → e+1 as the scene

@@ -1,4 +1,4 @@
-"""The paper's two procedural benchmarks (paper §IV-A, SPEC §4.1–4.3): Factorial Parking and Topology-Stress.
+"""The paper's two procedural benchmarks (paper §IV-A, spec §4.1–4.3): Factorial Parking and Topology-Stress.
 
 ```python
 from np_sim.benchmarks import load_benchmark, frozen_starts

@@ -251,7 +251,7 @@ def choose_start_region(rng: np.random.Generator, scene: Scene, grid: GeodesicGr
                         aim_m: tuple[float, float], size_m: tuple[float, float], keepout,
                         allowed=None, tolerance_m: float = 2.0, max_candidates: int = 80,
                         clearance_m: float = 0.3) -> np.ndarray:
-    """A start region whose free cells' median geodesic distance lies in ``band_m`` (SPEC §4.1: the regime is a
+    """A start region whose free cells' median geodesic distance lies in ``band_m`` (spec §4.1: the regime is a
     property of the region).
 
     Draws an aim distance uniformly in ``aim_m``, takes reachable cells within ``tolerance_m`` of it (inside

@@ -1,4 +1,4 @@
-"""Procedural generator of the Factorial Parking Benchmark (paper §IV-A "Scenario Design", SPEC §4.1).
+"""Procedural generator of the Factorial Parking Benchmark (paper §IV-A "Scenario Design", spec §4.1).
 
 3 × 3 × 3 cells: start distance {near, medium, long} × parking type {reverse, lateral, random} × difficulty
 {easy, medium, hard}; 3 training scenes and 1 test scene per cell (81 + 27), every scene a fresh layout drawn
@@ -19,7 +19,7 @@ from its own seed.
 7.6 / 6.9 / 6.3 m; random-type flank gap 3.8 / 3.2 / 2.8 m), aisle width, clutter count and boundary
 irregularity (4–5 / 5–7 / 8–10 boundary segments from chamfers, notches and jitter).
 
-**Distance regime** is a property of the scene's start region (SPEC §4.1): the region is placed so that the
+**Distance regime** is a property of the scene's start region (spec §4.1): the region is placed so that the
 median geodesic distance (1.5 m footprint-inflated grid, `np_sim.geodesic`) of its free cells lies in the
 regime's band — near 6–11 m, medium 13.5–20.5 m, long 24–36 m — and a scene whose final layout (after clutter)
 leaves the band is regenerated. Starts are never rejected by distance at sampling time.

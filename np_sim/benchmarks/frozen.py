@@ -1,5 +1,5 @@
 """The versioned benchmark files, their frozen evaluation starts, and the build loop both generators share
-(paper §IV-A and the evaluation protocol of §III, SPEC §4.3, §10).
+(paper §IV-A and the evaluation protocol of §III, spec §4.3, §10).
 
 **Files.** ``np_sim/benchmarks/data/<name>_v1.json`` holds one benchmark: the generator parameters, the
 rejection counts of the generation, the training and test scenes (`Scene.to_dict`, world frame) and, for each
@@ -279,7 +279,7 @@ def read_benchmark_file(name: str, data_dir: str | Path | None = None) -> tuple[
 
 def load_benchmark(name: str, split: str, data_dir: str | Path | None = None) -> list[Scene]:
     """The scenes of benchmark ``name`` ("factorial" | "topology") and ``split`` ("train" | "test"), in the
-    benchmark's cell order (SPEC §10; paper §IV-A). Each is validated against `SceneCapacity()` on load.
+    benchmark's cell order (spec §10; paper §IV-A). Each is validated against `SceneCapacity()` on load.
 
     Raises
     ------
@@ -294,7 +294,7 @@ def load_benchmark(name: str, split: str, data_dir: str | Path | None = None) ->
 
 def frozen_starts(name: str, data_dir: str | Path | None = None) -> np.ndarray:
     """(n_test_scenes, 40, 3) frozen evaluation starts of benchmark ``name``, world frame, row k for test scene k
-    of `load_benchmark(name, "test")` (SPEC §4.3, §10; paper §III evaluation protocol). A fresh writable copy.
+    of `load_benchmark(name, "test")` (spec §4.3, §10; paper §III evaluation protocol). A fresh writable copy.
 
     Raises
     ------

@@ -1,4 +1,4 @@
-"""Regenerate the shipped benchmark files from their fixed seeds (paper §IV-A, SPEC §4.1–4.3).
+"""Regenerate the shipped benchmark files from their fixed seeds (paper §IV-A, spec §4.1–4.3).
 
 ``python -m np_sim.benchmarks.generate [--benchmark factorial|topology|all] [--out DIR] [--check]``
 

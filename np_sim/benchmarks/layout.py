@@ -1,5 +1,5 @@
 """Layout distance between scenes and the structural-disjointness floor of a benchmark (paper §IV-A: the test
-scenes are "structurally disjoint" from the training scenes, SPEC §4.1 "different layouts, not re-seeded copies").
+scenes are "structurally disjoint" from the training scenes, spec §4.1 "different layouts, not re-seeded copies").
 
 **Layout distance.** Each scene's layout is the set of its outlines — every obstacle's boundary (a circle as
 the circle itself) and the scene boundary — expressed in the scene's own target frame

@@ -1,4 +1,4 @@
-"""Procedural generator of the Topology-Stress Benchmark (paper §IV-A "Scenario Design", SPEC §4.2).
+"""Procedural generator of the Topology-Stress Benchmark (paper §IV-A "Scenario Design", spec §4.2).
 
 Three route-choice families × {medium, hard}; 8 training and 3 test scenes per cell (48 + 18). Each layout is
 built in the target frame (target at the origin heading +ỹ, the car reverses into a bay that opens to +ỹ),

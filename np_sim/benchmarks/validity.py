@@ -1,4 +1,4 @@
-"""The four validity checks every shipped benchmark scene passes (paper §IV-A "Scenario Design", SPEC §4).
+"""The four validity checks every shipped benchmark scene passes (paper §IV-A "Scenario Design", spec §4).
 
 1. **target validity** — the scene's geometry is well formed (`Scene.validate`) and the target footprint is
    strictly inside the boundary and disjoint from every obstacle;

@@ -1,4 +1,4 @@
-"""Recorded-style clips of the delivery site (SPEC §4.4, §8 "Closed loop on a clip"; paper §V-F, App. C).
+"""Recorded-style clips of the delivery site (spec §4.4, §8 "Closed loop on a clip"; paper §V-F, App. C).
 
 A **clip** is what the paper's real vehicle recorded on the way back to its parking spot: an initial ego pose, an
 assigned parking spot and a 10 Hz sequence of frames, each with the ground truth of every object and, stored

@@ -84,7 +84,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``python -m np_sim.clips``."""
     parser = argparse.ArgumentParser(
         prog="python -m np_sim.clips",
-        description="The delivery site and its clips (SPEC §4.4): print a summary, draw a clip, or regenerate "
+        description="The delivery site and its clips (spec §4.4): print a summary, draw a clip, or regenerate "
                     "the shipped site and evaluation-clip files.",
         epilog="example: python -m np_sim.clips --summary --figure eval-1000003 --out clip.png",
     )

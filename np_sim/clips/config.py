@@ -1,4 +1,4 @@
-"""Configuration of the clips: the generator's parameters (`ClipConfig`) and the split constants (SPEC §4.4,
+"""Configuration of the clips: the generator's parameters (`ClipConfig`) and the split constants (spec §4.4,
 paper App. C): which seeds make which split, how many clips each holds, and where the evaluation clips ship."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The difficulty rule of the clips (SPEC §4.4 asks for "high search effort or a required target-averse first
+"""The difficulty rule of the clips (spec §4.4 asks for "high search effort or a required target-averse first
 manoeuvre"; this is the measurable stand-in, `DifficultyRule`). A clip is *difficult* when at least one holds:
 
 1. ``detour`` — geodesic detour: straight-line start→target distance d ≥ 5 m (below that the 1.5 m grid

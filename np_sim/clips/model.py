@@ -1,4 +1,4 @@
-"""The clip data model (SPEC §4.4, §8 "Closed loop on a clip"; paper §V-F, App. C).
+"""The clip data model (spec §4.4, §8 "Closed loop on a clip"; paper §V-F, App. C).
 
 A **clip** is what the paper's real vehicle recorded on the way back to its parking spot: an initial ego pose
 (``start``), an assigned parking pose (``target``, one of the site's spots) and a 10 Hz sequence of frames. Per

@@ -138,7 +138,7 @@ def _split_cached(split: str) -> tuple[tuple[Clip, ...], SplitStatistics]:
 
 
 def load_clips(split: str) -> list[Clip]:
-    """The clips of ``split`` (SPEC §10): ``"train"`` — 1,000 clips generated from the train seed stream on the
+    """The clips of ``split`` (spec §10): ``"train"`` — 1,000 clips generated from the train seed stream on the
     first call (about a minute), then cached in memory; ``"eval"`` — the 47 shipped difficult clips.
 
     Raises

@@ -1,4 +1,4 @@
-"""Four hand-made example scenes shipped as JSON beside this module (SPEC §4 format).
+"""Four hand-made example scenes shipped as JSON beside this module (spec §4 format).
 
 - ``reverse_bay``: a row of parked cars with one empty perpendicular bay; the car reverses in.
 - ``parallel_slot``: a kerb-side parallel slot (about 7 m) between two parked cars.

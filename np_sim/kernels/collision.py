@@ -1,6 +1,6 @@
 """Compiled collision checks of poses against a packed scene (``SceneArrays.geometry``, scene index ``k``).
 
-Two conventions (SPEC §2):
+Two conventions (spec §2):
 
 * reference point: the point is strictly inside the boundary and strictly outside every obstacle
   (a point on an edge or on a circle is a collision);

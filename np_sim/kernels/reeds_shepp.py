@@ -12,7 +12,7 @@ Eight base formulas, each closed in (x, y, φ), generate all 48 words through th
 Family counts: CSC 8, CCC 12 (C|C|C, C|CC, CC|C), CCCC 8 (CC|CC, C|CC|C), CCSC 16 (C|C_{π/2}SC and CSC_{π/2}|C in both
 turning orders), CCSCC 4 (C|C_{π/2}SC_{π/2}|C) — 48 in all.
 
-The pieces map onto the action arcs of paper eq:arc (SPEC §2): a piece of letter c ∈ {+1, 0, −1} and normalised
+The pieces map onto the action arcs of paper eq:arc (spec §2): a piece of letter c ∈ {+1, 0, −1} and normalised
 signed length t is the arc (κ, l) with l = t / κ_max and κ = −sgn(l)·c·κ_max (physical steering c·κ_max).
 """
 

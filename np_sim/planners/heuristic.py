@@ -1,6 +1,6 @@
 """The obstacle-aware holonomic heuristic of Hybrid A* (Dolgov et al. 2010, §III "2D holonomic-with-obstacles").
 
-A square grid over the boundary's bounding box; a cell is *free* when the reference point is valid (SPEC §2
+A square grid over the boundary's bounding box; a cell is *free* when the reference point is valid (spec §2
 reference-point convention) at its centre — a footprint-valid pose has a valid reference point, so one grid serves
 both conventions. Free cells connect to their eight neighbours; Dijkstra from the goal's cell gives each cell its
 shortest grid distance (m) to the goal, ``inf`` where none exists. Walls thinner than a cell can fall between

@@ -73,9 +73,9 @@ class HybridAStarConfig:
     analytic_near_m: float = 10.0
     """... and at every expansion whose Reeds–Shepp distance to the goal is within this (m)."""
     goal_tolerance_m: float = 0.1
-    """Position tolerance of success (m), SPEC §2."""
+    """Position tolerance of success (m), spec §2."""
     goal_tolerance_deg: float = 10.0
-    """Heading tolerance of success (deg), SPEC §2."""
+    """Heading tolerance of success (deg), spec §2."""
     max_expanded: int = 30000
     """Node budget: expansions before giving up."""
     time_budget_s: float = 1.0

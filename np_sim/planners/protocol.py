@@ -1,4 +1,4 @@
-"""What every planner of the testbed is (SPEC §7): ``plan(scene, start) -> Plan``, a collision ``convention`` and a
+"""What every planner of the testbed is (spec §7): ``plan(scene, start) -> Plan``, a collision ``convention`` and a
 registry ``name``.
 
 The experiments, the tracker and the closed loop see planners only through this protocol: a planner object plans

@@ -136,7 +136,9 @@ def test_measure_counts_only_finished_evaluated_seeds(tmp_path):
     wrong_size = measure(Arm("Fixed Hermite", "factorial_np_fixed"), runs, 1080, False, {})
     assert "has 2 episodes, expected 1080" in wrong_size.missing[0]
     hope = measure(Arm("Adapted HOPE", "factorial_hope"), runs, 1080, False, {})
-    assert hope.seeds_text() == "0 of 3 seeds: not available yet (the adapted HOPE planner is not built yet)"
+    assert hope.seeds_text() == "0 of 3 seeds: not trained yet (not started)"
+    backbone = measure(Arm("HOPE-style, none", "topology_hopestyle_none"), runs, 720, False, {})
+    assert backbone.seeds_text() == "0 of 3 seeds: not available yet (the HOPE-style backbone is not built yet)"
 
 
 def test_scene_examples_grid_and_png(tmp_path):

@@ -53,7 +53,7 @@ def _assert_free_by_the_paper_rule(scene: Scene, plan) -> None:
         points += list(plan.hermite.points)
     lot, walls = Polygon(scene.boundary), [Polygon(o.vertices) for o in scene.obstacles]
     assert all(lot.contains(Point(q)) and not any(w.intersects(Point(q)) for w in walls) for q in points)
-    assert math.hypot(*(points[-1] - scene.target[:2])) <= 0.1 + 1e-9  # SPEC §2 tolerance, its edge included
+    assert math.hypot(*(points[-1] - scene.target[:2])) <= 0.1 + 1e-9  # spec §2 tolerance, its edge included
 
 
 def test_staged_metrics_exclude_the_handoff_jump():

@@ -1,4 +1,4 @@
-"""BEV raster (paper App. B, SPEC §7): pixel colours against shapely at the sample points, covered area against
+"""BEV raster (paper App. B, spec §7): pixel colours against shapely at the sample points, covered area against
 shapely's area, ego alignment, the trajectory tail and its colour ramp, argument errors."""
 
 from __future__ import annotations

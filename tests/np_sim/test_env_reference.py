@@ -95,7 +95,7 @@ def _near_target_start(rng, scene: Scene, config: EnvConfig) -> np.ndarray:
 
 
 def _region_start(rng, scene: Scene) -> np.ndarray:
-    """A full-range start like the env's sampler (SPEC §4.3): position uniform in the start region (default the
+    """A full-range start like the env's sampler (spec §4.3): position uniform in the start region (default the
     boundary), heading uniform, whole footprint free — by rejection against the oracle's footprint check."""
     from shapely.geometry import Point, Polygon
 
@@ -310,7 +310,7 @@ def test_env_matches_reference_on_random_episodes(label):
 
 @pytest.mark.parametrize("label", list(CONFIGS))
 def test_direct_terminal_success_matches_reference(label):
-    """Starts that retrace onto the target exactly ((κ, l) retraced by (−κ, −l), SPEC §2): direct success with
+    """Starts that retrace onto the target exactly ((κ, l) retraced by (−κ, −l), spec §2): direct success with
     p_H = 0, no Hermite candidate; compared to the oracle including the reward and the final observation."""
     config = CONFIGS[label]
     rng = np.random.default_rng(77)
@@ -418,7 +418,7 @@ EDGE_PROBE = Scene.from_dict({
 
 
 def test_exact_contacts_follow_the_reference_point_convention():
-    """Reference-point convention at exact contacts (SPEC §2): a sample exactly on an obstacle edge or vertex, or
+    """Reference-point convention at exact contacts (spec §2): a sample exactly on an obstacle edge or vertex, or
     exactly on the boundary, is a collision; 5 cm off the edge is valid. (Straight arcs along an axis with
     exactly representable lengths land exactly on the edge: 7.7 − 2.5 == 5.2 in binary64.)"""
     up = math.pi / 2

@@ -106,7 +106,7 @@ def _to_world(points_t, target) -> np.ndarray:
 
 
 def _paper_candidates(pose_t, kappa0: float, cfg: ConnectorConfig):
-    """Every candidate rebuilt from the paper's equations with numpy, in SPEC §5's order (offsets, headings, then
+    """Every candidate rebuilt from the paper's equations with numpy, in spec §5's order (offsets, headings, then
     the start and end tangent scales): eq:hermite with tangent magnitude = endpoint distance × scale, forward
     tangents iff ỹ < 0; eq:hermite-kappa on N points; eq:mincost. Returns points (C, N, 2), max κ̄ (C,), cost (C,)."""
     x, y, th = pose_t

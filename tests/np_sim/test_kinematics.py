@@ -1,4 +1,4 @@
-"""Arc kinematics (paper eq:arc, SPEC §2): hand-derived poses, sign conventions, retracing, sampling, wrapping.
+"""Arc kinematics (paper eq:arc, spec §2): hand-derived poses, sign conventions, retracing, sampling, wrapping.
 
 eq:arc, with r = 1/|κ|, α = |lκ|, δ_l = sgn(l), δ_κ = sgn(κ):
     x' = x + δ_l [ r(1 − cos α) δ_κ sin θ + r sin α cos θ ]

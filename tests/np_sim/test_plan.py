@@ -1,4 +1,4 @@
-"""Plan: sampling with gear and physical steering curvature (SPEC §2), metrics (eq:metrics)."""
+"""Plan: sampling with gear and physical steering curvature (spec §2), metrics (eq:metrics)."""
 
 import math
 
@@ -43,7 +43,7 @@ def test_hermite_samples_end_at_the_target_with_the_right_steering_sign():
         np.testing.assert_allclose(rows[-1, :2], c.points[-1], atol=1e-9)
         assert abs(math.remainder(rows[-1, 2] - c.terminal_pose[2], 2 * math.pi)) < 0.05
         assert np.all(rows[1:, 4] == (1.0 if forward else -1.0))
-        # the integral of steer_curvature over signed length equals the heading change (SPEC §2)
+        # the integral of steer_curvature over signed length equals the heading change (spec §2)
         signed = np.diff(rows[:, 5]) * rows[1:, 4]
         dtheta = np.sum(rows[1:, 3] * signed)
         assert dtheta == pytest.approx(math.remainder(rows[-1, 2] - rows[0, 2], 2 * math.pi), abs=0.05)

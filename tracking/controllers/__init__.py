@@ -1,6 +1,6 @@
-"""Path-tracking controllers behind one interface (SPEC §8).
+"""Path-tracking controllers behind one interface (spec §8).
 
-Lateral controllers map the tracking state to a physical steering curvature c (1/m, positive = left, SPEC §2):
+Lateral controllers map the tracking state to a physical steering curvature c (1/m, positive = left, spec §2):
 `LQRController` (kinematic path-error model, python-control gains scheduled on speed and gear, curvature
 feed-forward), `StanleyController`, `PurePursuitController`. `SteeringLimiter` applies the angle and rate limits;
 `SpeedController` is the longitudinal PI loop. `make_lateral(name, config)` builds one by name.

@@ -41,7 +41,7 @@ def gain_table(config: LQRConfig) -> dict[int, np.ndarray]:
 
 
 class LQRController(LateralController):
-    """c = c_ref − K(v, gear)·(e_y, e_θ, c_now − c_ref): LQR feedback plus curvature feed-forward (SPEC §8).
+    """c = c_ref − K(v, gear)·(e_y, e_θ, c_now − c_ref): LQR feedback plus curvature feed-forward (spec §8).
 
     Gains are computed once per gear on the speed grid of `LQRConfig` and interpolated linearly in |v|
     (clamped to the grid), with the gear's sign: the schedule is on the commanded gear, so it stays defined at

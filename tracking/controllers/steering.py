@@ -1,4 +1,4 @@
-"""Steering angle and rate limits on the bicycle steering angle δ = atan(c·L) (SPEC §2, §3)."""
+"""Steering angle and rate limits on the bicycle steering angle δ = atan(c·L) (spec §2, §3)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Factorial Parking Benchmark (paper §IV-A, SPEC §4.1): counts, the four checks, regimes, byte-exact regeneration."""
+"""Factorial Parking Benchmark (paper §IV-A, spec §4.1): counts, the four checks, regimes, byte-exact regeneration."""
 
 import math
 from collections import Counter

@@ -1,4 +1,4 @@
-"""Frozen evaluation starts and benchmark files (SPEC §4.3, §10): shapes, validity, seed-0 protocol, errors, CLIs."""
+"""Frozen evaluation starts and benchmark files (spec §4.3, §10): shapes, validity, seed-0 protocol, errors, CLIs."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Topology-Stress Benchmark (paper §IV-A, SPEC §4.2): counts, checks, route stress beyond the LiDAR range."""
+"""Topology-Stress Benchmark (paper §IV-A, spec §4.2): counts, checks, route stress beyond the LiDAR range."""
 
 from collections import Counter
 

@@ -1,6 +1,6 @@
 """Compiled collision kernels (np_sim.kernels.collision) against shapely on seeded random scenes.
 
-Oracles (SPEC §2):
+Oracles (spec §2):
 
 * reference point valid ⇔ boundary.contains(pt) (a point on the boundary is not contained), no polygon obstacle
   intersects pt (touching counts), and every circle centre is at distance > r;
