@@ -36,6 +36,8 @@ from np_sim.validate import plan_valid, scoring_rule
 
 METHODS = ("hybrid_astar", "np_guided_astar", "ompl_rrtstar", "neuralparker", "staged_astar_np", "hope")
 """Planners of the table (`experiments.registry`), in its row order."""
+DEFAULT_METHODS = tuple(m for m in METHODS if m != "hope")
+"""What runs without naming methods: all but the adapted HOPE, which needs its own checkpoint."""
 DEFAULT_CHECKPOINT = Path("checkpoints/factorial_np_seed0.pt")
 
 
@@ -43,7 +45,7 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
         convention: str = "reference_point", out: Path | None = None, limit: int | None = None, ompl_seed: int = 0,
         progress: bool = True, hope_checkpoint: Path | None = None) -> dict[str, Any]:
     """Plan every frozen start with every method; returns the records, the table text and the run folder."""
-    methods = check_names([m for m in METHODS if m != "hope"] if methods is None else methods, METHODS)
+    methods = check_names(DEFAULT_METHODS if methods is None else methods, METHODS)
     options = PlannerOptions(checkpoint=checkpoint, convention=convention, ompl_seed=ompl_seed, benchmark=benchmark,
                              hope_checkpoint=hope_checkpoint)
     planners = build_planners(methods, options)
@@ -121,7 +123,7 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--benchmark", choices=["factorial", "topology"], default="factorial")
     parser.add_argument("--checkpoint", type=Path, default=DEFAULT_CHECKPOINT,
                         help=f"NeuralParker checkpoint for the learned methods (default {DEFAULT_CHECKPOINT})")
-    parser.add_argument("--methods", nargs="+", choices=METHODS, default=[m for m in METHODS if m != "hope"],
+    parser.add_argument("--methods", nargs="+", choices=METHODS, default=list(DEFAULT_METHODS),
                         help="planners to run (default all but hope, which needs --hope-checkpoint)")
     parser.add_argument("--hope-checkpoint", type=Path,
                         help="adapted-HOPE checkpoint for the hope method (hope_policy.train's final.pt)")

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from experiments.planners import DEFAULT_CHECKPOINT, METHODS, main
+from experiments.planners import DEFAULT_CHECKPOINT, DEFAULT_METHODS, METHODS, main
 from np_policy.staged import NPGuidedAStar, StagedPlan, StagedPlanner
 from np_sim.kinematics import arc_step
 from np_sim.metrics import plan_metrics
@@ -93,9 +93,9 @@ def test_staged_hands_over_within_the_radius(learned):
 
 @needs_checkpoint
 def test_cli_smoke_writes_records(tmp_path: Path):
-    result = main(["--benchmark", "factorial", "--limit", "1", "--out", str(tmp_path), "--methods", *METHODS])
+    result = main(["--benchmark", "factorial", "--limit", "1", "--out", str(tmp_path), "--methods", *DEFAULT_METHODS])
     rows = list(csv.DictReader((tmp_path / "records.csv").open()))
-    assert [r["method"] for r in rows] == list(METHODS)
+    assert [r["method"] for r in rows] == list(DEFAULT_METHODS)
     assert (tmp_path / "table.md").read_text().count("|") > 20
     assert "NP-Guided A* / Hybrid A* median plan time" in result["table"]
     # every method's success passes the rule it is scored by (OMPL RRT*'s own checks use another spacing)
