@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from experiments.planners import DEFAULT_CHECKPOINT, DEFAULT_METHODS, METHODS, main
+from experiments.planners import DEFAULT_CHECKPOINT, DEFAULT_METHODS, main
 from np_policy.staged import NPGuidedAStar, StagedPlan, StagedPlanner
 from np_sim.kinematics import arc_step
 from np_sim.metrics import plan_metrics
