@@ -62,12 +62,16 @@ def _same_weights(a: dict[str, Any], b: dict[str, Any]) -> bool:
             and all(torch.equal(a["model"][k], b["model"][k]) for k in a["model"]))
 
 
+RUN_OUTPUTS = ("best.pt", "final.pt")
+"""What a finished run ships: NeuralParker's selected ``best.pt``, the adapted HOPE's ``final.pt`` (no selection)."""
+
+
 def _source_run(path: Path, payload: dict[str, Any], runs: list[Path], digest: str) -> tuple[Path, Path | None]:
-    """(run folder, the best.pt ``path`` copies or None when it is that best.pt); a CheckpointError when no run's
-    best.pt has its bytes or weights, or more than one does."""
-    if path.name == "best.pt" and path.parent in runs:
+    """(run folder, the run output (`RUN_OUTPUTS`) ``path`` copies or None when it is one); a CheckpointError when
+    no run's output has its bytes or weights, or more than one does."""
+    if path.name in RUN_OUTPUTS and path.parent in runs:
         return path.parent, None
-    bests = [run / "best.pt" for run in runs if (run / "best.pt").is_file()]
+    bests = [run / name for run in runs for name in RUN_OUTPUTS if (run / name).is_file()]
     found = [b for b in bests if file_sha256(b) == digest]
     if not found:
         found = [b for b in bests if _same_weights(payload, load_checkpoint(b))]
