@@ -60,7 +60,7 @@ from hope_policy.spaces import N_ANCHORS, TARGET_SIZE, action_space, action_to_a
 from hope_policy.takeover import MAX_CHUNKS
 from np_sim.bev import render_bev_batch
 from np_sim.config import EnvConfig
-from np_sim.env_core import BatchCore
+from np_sim.env_core import BatchCore, checked_actions
 from np_sim.errors import ConfigError
 from np_sim.frames import from_target_frame
 from np_sim.kernels import step as NK
@@ -158,13 +158,7 @@ class HopeCore:
 
     def step(self, actions: np.ndarray) -> None:
         """Advance every env by its normalised action row; fills the observation arrays and ``R``."""
-        a = np.asarray(actions, dtype=np.float64)
-        if a.shape != (self.num_envs, 2):
-            raise ValueError(f"step: expected actions of shape ({self.num_envs}, 2), got {a.shape}")
-        if not np.all(np.isfinite(a)) or np.any(np.abs(a) > 1.0):
-            bad = np.argwhere(~np.isfinite(a) | (np.abs(a) > 1.0))[0]
-            raise ValueError(f"step: action[{bad[0]}] = {a[bad[0]].tolist()} lies outside the action space "
-                             "[-1, 1]^2 (the env never clips; clip or squash in the policy)")
+        a = checked_actions(actions, self.num_envs)
         b = self.base
         arcs = np.ascontiguousarray(action_to_arc(a, self.config))
         K.step_batch(self.geo, self.targets, self.S, self.P, self.W, arcs, b.local, self.queue, b.b_ranges, b.off_c,

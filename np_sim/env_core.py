@@ -61,6 +61,21 @@ def kernel_parameters(config: EnvConfig) -> np.ndarray:
     return P
 
 
+def checked_actions(actions, num_envs: int) -> np.ndarray:
+    """``actions`` as a float64 (num_envs, 2) array in [-1, 1]^2; ValueError naming the first bad row otherwise
+    (the envs never clip)."""
+    a = np.asarray(actions, dtype=np.float64)
+    if a.shape != (num_envs, 2):
+        raise ValueError(f"step: expected actions of shape ({num_envs}, 2), got {a.shape}")
+    if not np.all(np.isfinite(a)) or np.any(np.abs(a) > 1.0):
+        bad = np.argwhere(~np.isfinite(a) | (np.abs(a) > 1.0))[0]
+        raise ValueError(
+            f"step: action[{bad[0]}] = {a[bad[0]].tolist()} lies outside the action space [-1, 1]^2 "
+            "(the env never clips; clip or squash in the policy)"
+        )
+    return a
+
+
 class BatchCore:
     """State of ``num_envs`` episodes over a list of scenes, stepped by one compiled call."""
 
@@ -134,15 +149,7 @@ class BatchCore:
 
     def step(self, actions: np.ndarray) -> None:
         """Advance every env by its normalised action row; fills ``obs`` and ``R``."""
-        a = np.asarray(actions, dtype=np.float64)
-        if a.shape != (self.num_envs, 2):
-            raise ValueError(f"step: expected actions of shape ({self.num_envs}, 2), got {a.shape}")
-        if not np.all(np.isfinite(a)) or np.any(np.abs(a) > 1.0):
-            bad = np.argwhere(~np.isfinite(a) | (np.abs(a) > 1.0))[0]
-            raise ValueError(
-                f"step: action[{bad[0]}] = {a[bad[0]].tolist()} lies outside the action space [-1, 1]^2 "
-                "(the env never clips; clip or squash in the policy)"
-            )
+        a = checked_actions(actions, self.num_envs)
         K.step_batch(self.geo, self.arrays.targets, self.static_obs, self.S, self.P, np.ascontiguousarray(a),
                      self.local, self.b_ranges, self.off_c, self.off_s, self.offsets, self.headings, self.scales0,
                      self.scales1, self.basis, self.dbasis, self.h_pts, self.h_kbar_max, self.h_dk, self.h_len,
