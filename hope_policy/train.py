@@ -13,10 +13,11 @@ normalisation statistics: the checkpoint that is evaluated, with no selection.
 Each collect starts every env on a fresh episode, drawn from a seed derived from the run seed and the update
 index, and the episodes still running when the batch is full are cut there (their last step bootstrapped from the
 critic, as a truncation) and not counted. That makes an update boundary a complete description of the run's
-state: ``snapshot.pt`` (every ``snapshot_every`` updates and at the end) holds the weights, both optimisers, the
+state: ``snapshot.pt`` (every ``snapshot_every`` updates, and where ``max_updates`` stops a run) holds the weights, both optimisers, the
 critic copy, the normalisation statistics, the counters and the generator states, and a run resumed from it
-computes bit for bit what the uninterrupted run computes. ``metrics.jsonl`` gets one line per update and TensorBoard
-event files beside it hold the same scalars.
+computes bit for bit what the uninterrupted run computes. A finished run keeps only its outputs: once ``final.pt``
+is written the snapshot is removed, and ``--resume`` on a finished run says so and trains nothing.
+``metrics.jsonl`` gets one line per update and TensorBoard event files beside it hold the same scalars.
 """
 
 from __future__ import annotations
@@ -293,8 +294,14 @@ def _log(writer: SummaryWriter, row: dict[str, Any]) -> None:
 def train(config: HopeTrainConfig, out: str | Path, resume: bool = False, overwrite: bool = False,
           progress: bool = True, max_updates: int | None = None) -> list[dict[str, Any]]:
     """Run (or resume) training until ``config.episodes`` episodes have ended; returns the metrics rows.
-    ``max_updates`` stops earlier, after that many updates in total (a snapshot is written there)."""
+    ``max_updates`` stops earlier, after that many updates in total (a snapshot is written there). The files of an
+    update are written in an order a kill cannot make lie: the metrics row, then ``final.pt`` when the budget is
+    spent, then the snapshot (removed instead once ``final.pt`` exists). Resuming a finished run (`finished_rows`)
+    trains nothing and returns its rows."""
     out = Path(out)
+    if resume and not overwrite and (done := finished_rows(out, config)) is not None:
+        (out / "snapshot.pt").unlink(missing_ok=True)  # left by a kill between final.pt and its removal
+        return done
     _prepare(out, resume, overwrite)
     trainer = HopeTrainer(config)
     metrics_path = out / "metrics.jsonl"
@@ -317,12 +324,29 @@ def train(config: HopeTrainConfig, out: str | Path, resume: bool = False, overwr
         _log(writer, row)
         if trainer.done:
             save_hope_checkpoint(out / "final.pt", trainer.policy_payload())
-        if trainer.updates % config.snapshot_every == 0 or trainer.done or trainer.updates == max_updates:
+            (out / "snapshot.pt").unlink(missing_ok=True)
+        elif trainer.updates % config.snapshot_every == 0 or trainer.updates == max_updates:
             save_hope_checkpoint(out / "snapshot.pt", trainer.state())
         bar.update(min(row["episodes"], config.episodes) - bar.n)
         bar.set_postfix(ret=f"{row['train_return']:.2f}", succ=f"{row['train_success']:.2f}")
     bar.close()
     writer.close()
+    return rows
+
+
+def finished_rows(out: Path, config: HopeTrainConfig) -> list[dict[str, Any]] | None:
+    """The metrics rows of the finished run in ``out`` (its last row has counted ``config.episodes`` and
+    ``final.pt`` exists, read from the files alone), or None when it is not finished. A run trained under another
+    config is a CheckpointError naming its ``config.json`` and every differing field."""
+    rows = read_metrics(out / "metrics.jsonl", key="update")
+    if not rows or rows[-1]["episodes"] < config.episodes or not (out / "final.pt").exists():
+        return None
+    path = out / "config.json"
+    try:
+        stored = HopeTrainConfig.from_dict(json.loads(path.read_text(encoding="utf-8"))).to_dict()
+    except (OSError, ValueError) as exc:  # ValueError covers bad JSON and ConfigError
+        raise ConfigError(f"{path}: not a readable HopeTrainConfig of the finished run ({exc})") from exc
+    check_config(path, config.to_dict(), stored)
     return rows
 
 
@@ -362,7 +386,8 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     parser.add_argument("--out", type=Path, help="run folder (default: results/hope_train/<benchmark>_seed<S>); "
                         "a folder that already holds a run is refused without --resume or --overwrite")
     mode = parser.add_mutually_exclusive_group()
-    mode.add_argument("--resume", action="store_true", help="continue from <out>/snapshot.pt")
+    mode.add_argument("--resume", action="store_true", help="continue from <out>/snapshot.pt (on a finished run: "
+                      "trains nothing)")
     mode.add_argument("--overwrite", action="store_true", help="replace the run in --out")
     parser.add_argument("--episodes", type=positive_int, default=10_000, help="episode budget (paper: 10,000)")
     parser.add_argument("--input", choices=ADDED_INPUTS, default="none", help="added scene input (Table III)")
@@ -378,8 +403,8 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     config = build_config(args)
     out = args.out or Path("results/hope_train") / f"{config.benchmark}_seed{config.seed}"
     rows = train(config, out, resume=args.resume, overwrite=args.overwrite)
-    print(f"{len(rows)} updates, {rows[-1]['episodes'] if rows else 0} episodes in {out}: metrics.jsonl, "
-          "final.pt, snapshot.pt")
+    print(f"{out}: finished after {len(rows)} updates, {rows[-1]['episodes'] if rows else 0} episodes "
+          "(metrics.jsonl, final.pt; no snapshot)")
     return rows
 
 

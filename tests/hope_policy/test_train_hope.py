@@ -62,6 +62,7 @@ def test_resume_at_an_update_boundary_is_bit_for_bit_the_uninterrupted_run(strai
 def test_a_run_writes_its_files_and_stops_after_its_episode_budget(tmp_path):
     rows = train(tiny_config(episodes=2), tmp_path, progress=False)
     assert rows[-1]["episodes"] >= 2 and all(r["episodes"] < 2 for r in rows[:-1])
+    assert not (tmp_path / "snapshot.pt").exists()  # a finished run keeps only its outputs
     final = load_hope_checkpoint(tmp_path / "final.pt")
     assert final["episodes"] == rows[-1]["episodes"] and "ppo" not in final
     assert sorted(final["obs_norm"]) == ["lidar", "target"]  # the mask is not normalised
@@ -71,6 +72,24 @@ def test_a_run_writes_its_files_and_stops_after_its_episode_budget(tmp_path):
     written = json.loads((tmp_path / "config.json").read_text())
     assert written == json.loads(json.dumps(tiny_config(episodes=2).to_dict()))
     assert list(tmp_path.glob("events.out.tfevents.*"))
+
+
+def test_a_finished_run_drops_its_snapshot_and_resuming_it_trains_nothing(tmp_path):
+    config = tiny_config(episodes=40)
+    train(config, tmp_path, progress=False, max_updates=1)
+    assert (tmp_path / "snapshot.pt").exists() and not (tmp_path / "final.pt").exists()
+    rows = train(config, tmp_path, resume=True, progress=False)
+    assert rows[-1]["episodes"] >= 40 and len(rows) > 1
+    assert (tmp_path / "final.pt").exists() and not (tmp_path / "snapshot.pt").exists()
+    final = (tmp_path / "final.pt").read_bytes()
+    (tmp_path / "snapshot.pt").write_bytes(b"left by a kill between final.pt and its removal")
+    again = train(config, tmp_path, resume=True, progress=False)
+    assert again == json_rows(tmp_path) and [r["update"] for r in again] == [r["update"] for r in rows]
+    assert not (tmp_path / "snapshot.pt").exists() and (tmp_path / "final.pt").read_bytes() == final
+
+
+def json_rows(folder: Path) -> list[dict]:
+    return [json.loads(line) for line in (folder / "metrics.jsonl").read_text().splitlines()]
 
 
 def test_cli_refuses_an_existing_run_and_a_missing_snapshot(straight_run, tmp_path, capsys):
