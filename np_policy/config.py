@@ -395,6 +395,11 @@ class NeuralParkerConfig:
     rescue_clearance_m: float = 0.0
     """The rescue rounds also run while the chosen plan's clearance level (the ``weights.margins_m`` ladder) is
     below this (m); 0 = only after a failure."""
+    accept_mean_m: float | None = None
+    """Anytime play: the mean rollout is returned at once, before any sampling, when it succeeds, passes the
+    validation, is steerable (``weights.curvature_tolerance``) and keeps its footprint grown by this (m) off every
+    obstacle along the whole path; otherwise the sampled and rescue rounds run as without it, the validated mean
+    rollout among their candidates. None = always sample (best of all)."""
     margin_m: float = 0.0
     """The rollouts' collision checks use the footprint grown by this on every side (m,
     `np_sim.vehicle.VehicleSpec.inflated`); the choice's costs and the validation see the real body."""
@@ -415,8 +420,10 @@ class NeuralParkerConfig:
         if self.action == "sample" and (self.samples or self.rescue):
             raise ConfigError(f"NeuralParkerConfig.action: 'sample' plays one sampled rollout; it does not combine "
                               f"with samples ({self.samples}) or rescue rounds ({list(self.rescue)})")
-        for name in ("rescue_clearance_m", "margin_m"):
+        for name in ("rescue_clearance_m", "margin_m", "accept_mean_m"):
             value = getattr(self, name)
+            if value is None and name == "accept_mean_m":
+                continue
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ConfigError(f"NeuralParkerConfig.{name}: expected a finite number >= 0 m, got {value!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
@@ -457,8 +464,15 @@ executed footprint success, standard error about 0.04: mean action only 0.59; be
 length cost and 0.83 with the drive-time cost, of 64 0.78; noise σ × 1.5 0.82, × 0.7 0.78; the centred connector
 order 0.82 (neutral here; chosen from the near-target cycles of three held-out clips, where the paper's order ends
 plans on the edge of the 10° parking tolerance); the two policy rescue rounds 0.86 (256 rollouts each: 0.86); the
-rescue for clearance below 0.2 m 0.89 (0.1 m: 0.91 vs 0.93 with ``--set clip_run.stitch=true clip_run.track_window=5``); the third round
-with uniform first arcs 0.90 (64 rollouts or 2 σ: 0.89). ``docs/planners.md`` has the whole table."""
+rescue for clearance below 0.2 m 0.89 (0.1 m: 0.91 vs 0.93 with ``--set clip_run.stitch=true
+clip_run.track_window=5``); the third round with uniform first arcs 0.90 (64 rollouts or 2 σ: 0.89). ``docs/planners.md`` has the whole table."""
 
-PRESETS: dict[str, NeuralParkerConfig] = {"paper": PAPER, "footprint_best_of_n": FOOTPRINT_BEST_OF_N}
+FOOTPRINT_ANYTIME = dataclasses.replace(FOOTPRINT_BEST_OF_N, accept_mean_m=FOOTPRINT_BEST_OF_N.weights.wanted_margin_m)
+"""The footprint best-of-N planner played anytime: the mean rollout is returned at once when it succeeds, passes
+the validation, is steerable and keeps the choice's wanted margin (0.2 m) off every obstacle; otherwise the answer
+is 'footprint_best_of_n''s. The acceptance margin is the choice's own wanted clearance, not a tuned number: a
+mean rollout that keeps it already costs no clearance term, so sampling could only shorten it."""
+
+PRESETS: dict[str, NeuralParkerConfig] = {"paper": PAPER, "footprint_best_of_n": FOOTPRINT_BEST_OF_N,
+                                          "footprint_anytime": FOOTPRINT_ANYTIME}
 """Named NeuralParker configurations; a variant is ``dataclasses.replace(PRESETS[name], field=value)``."""

@@ -29,7 +29,8 @@ from np_policy.checkpoint import load_checkpoint, load_weights
 from np_policy.config import PAPER, NeuralParkerConfig, TrainConfig, check_benchmark_layout, checkpoint_config
 from np_policy.inference import CompiledActor
 from np_policy.network import ActorCritic
-from np_policy.sampling import PolicyRollouts, choose, clearance_level
+from np_policy.sampling import PolicyRollouts, choose, clearance_level, steerable
+from np_sim.collision import path_valid
 from np_sim.config import EnvConfig
 from np_sim.plan import Plan
 from np_sim.scene import Scene
@@ -112,21 +113,34 @@ class NeuralParkerPlanner:
     def plan(self, scene: Scene, start) -> Plan:
         """Roll out the mean action from ``start`` until success, collision or the arc budget (paper §III-A); with
         ``samples``, the best of that and the sampled rollouts (``np_policy.sampling.choose``), then the rescue
-        rounds; with ``action='sample'``, one rollout of sampled actions."""
+        rounds, unless ``accept_mean_m`` accepts the mean rollout first; with ``action='sample'``, one rollout of
+        sampled actions. ``Plan.stage`` names the stage that gave the plan: 'mean', 'sampled' or 'rescue'."""
         t0 = time.perf_counter()
         if self.single is not None:
             plan = self._claimed(scene, self.single(scene, start, seed=query_seed(self.config.seed, start))[0])
-            return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0)
-        plan = self._mean_rollout(scene, start)
-        if self.sampled is None:
+            return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage="sampled")
+        plan, stage = self._mean_rollout(scene, start), "mean"
+        anytime = self.config.accept_mean_m is not None
+        if self.sampled is None or anytime:
             plan = self._claimed(scene, plan)
-        else:
-            plan = self._choose_claimed(scene, [plan, *self.sampled(scene, start)])
+        if anytime and self._accepted(scene, plan):
+            return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
+        if self.sampled is not None:
+            plan, stage = self._choose_claimed(scene, [plan, *self.sampled(scene, start)], anytime), "sampled"
         for rounds in self.rescue:
             if plan.success and not self._too_close(scene, plan):
                 break
-            plan = self._choose_claimed(scene, [plan, *rounds(scene, start)], first_checked=True)
-        return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0)
+            plan, stage = self._choose_claimed(scene, [plan, *rounds(scene, start)], first_checked=True), "rescue"
+        return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
+
+    def _accepted(self, scene: Scene, plan: Plan) -> bool:
+        """The validated ``plan`` succeeds, is steerable and keeps ``accept_mean_m`` of clearance (the anytime test)."""
+        if not plan.success:
+            return False
+        margin = self.config.accept_mean_m
+        rows = plan.sample(self.config.weights.sample_ds_m)
+        return (steerable(rows, self.body, self.config.weights)
+                and path_valid(scene, rows[:, :3], "footprint", self.body.inflated(margin)))
 
     def _mean_rollout(self, scene: Scene, start) -> Plan:
         """The paper's planner: the mean action rolled out once (the batch of one with zero noise)."""

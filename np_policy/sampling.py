@@ -189,6 +189,13 @@ def drive_length(rows: np.ndarray, weights: ChoiceWeights) -> float:
     return float(np.sum(ds / np.minimum(cruise, curve)) * weights.forward_speed_mps)
 
 
+def steerable(rows: np.ndarray, vehicle: VehicleSpec, weights: ChoiceWeights) -> bool:
+    """Every sampled |steer curvature| of plan rows (``Plan.sample``) is within (1 + ``curvature_tolerance``)·κ_max:
+    the tracker's own check of a plan it is given."""
+    limit = (1.0 + weights.curvature_tolerance) * vehicle.kappa_max
+    return bool(np.all(np.abs(rows[:, 3]) <= limit))
+
+
 def plan_cost(plan: Plan, scene: Scene, vehicle: VehicleSpec, weights: ChoiceWeights) -> tuple[bool, float]:
     """(steering beyond κ_max, cost) of a successful plan; lower is better, steerable plans first.
 
@@ -196,8 +203,7 @@ def plan_cost(plan: Plan, scene: Scene, vehicle: VehicleSpec, weights: ChoiceWei
     the tracker's own check. Cost: ``drive_length`` + reversal, clearance and terminal-heading terms of
     ``weights``."""
     rows = plan.sample(weights.sample_ds_m)
-    limit = (1.0 + weights.curvature_tolerance) * vehicle.kappa_max
-    too_sharp = not bool(np.all(np.abs(rows[:, 3]) <= limit))
+    too_sharp = not steerable(rows, vehicle, weights)
     level = clearance_level(scene, rows[:, :3], vehicle, weights.margins_m)
     if level < 0:
         steps = sorted(weights.margins_m)

@@ -49,6 +49,9 @@ class Plan:
     """Wall time spent planning (s)."""
     expanded_nodes: int = 0
     """Search nodes expanded (searches only)."""
+    stage: str = ""
+    """Which stage of a staged-effort planner gave the plan (`np_policy.planner`: 'mean', 'sampled', 'rescue');
+    '' for planners of one stage."""
 
     def metrics(self) -> tuple[float, int, float]:
         """(L, reversals, Δκ) of paper eq:metrics."""
