@@ -465,7 +465,8 @@ length cost and 0.83 with the drive-time cost, of 64 0.78; noise σ × 1.5 0.82,
 order 0.82 (neutral here; chosen from the near-target cycles of three held-out clips, where the paper's order ends
 plans on the edge of the 10° parking tolerance); the two policy rescue rounds 0.86 (256 rollouts each: 0.86); the
 rescue for clearance below 0.2 m 0.89 (0.1 m: 0.91 vs 0.93 with ``--set clip_run.stitch=true
-clip_run.track_window=5``); the third round with uniform first arcs 0.90 (64 rollouts or 2 σ: 0.89). ``docs/planners.md`` has the whole table."""
+clip_run.track_window=5``); the third round with uniform first arcs 0.90 (64 rollouts or 2 σ: 0.89).
+``docs/planners.md`` has the whole table."""
 
 FOOTPRINT_ANYTIME = dataclasses.replace(FOOTPRINT_BEST_OF_N, accept_mean_m=FOOTPRINT_BEST_OF_N.weights.wanted_margin_m)
 """The footprint best-of-N planner played anytime: the mean rollout is returned at once when it succeeds, passes
