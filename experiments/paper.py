@@ -7,9 +7,12 @@ For each of the paper's simulation tables (``tab:twostage``, ``tab:topology-stre
 ``fig:global-family``, ``fig:hermite-case``) the report has a section with the paper's numbers
 (`experiments.paper_numbers`) beside ours and the seeds each row has. A row's seed counts when its training run
 (the sweep's run folder, `experiments.sweep_plan`) is finished, i.e. its ``metrics.jsonl`` reaches its config's
-epochs, and its frozen-start evaluation records exist in the run folder (``eval_<benchmark>/records.csv``: the
-checkpoint's own connector, `experiments.evaluate`; ``eval_<benchmark>_ensemble/``: the ensemble connector swapped
-in at evaluation only; ``eval_<benchmark>_staged/``: the Hybrid A* → NP planner, `experiments.planners`). A
+epochs (episodes for the adapted HOPE) and it holds its trainer's output (``best.pt``; the adapted HOPE's
+``final.pt``: `experiments.sweep_plan.RunSpec.output`), and its frozen-start evaluation records exist in the run
+folder (``eval_<benchmark>/records.csv``: the checkpoint's own connector, `experiments.evaluate`, or the ``hope``
+method of `experiments.planners` for an adapted-HOPE checkpoint; ``eval_<benchmark>_ensemble/``: the ensemble
+connector swapped in at evaluation only; ``eval_<benchmark>_staged/``: the Hybrid A* → NP planner,
+`experiments.planners`). A
 finished run without records is evaluated here (``--no-evaluate``: reported as not evaluated); a run that is not
 finished is named with its state ("0 of 3 seeds: not trained yet"), never left out. Success is on the full set,
 L, reversals and Δκ (eq:metrics) on the within-seed common-success cohort of the rows measured, each the mean ±
@@ -37,7 +40,7 @@ from experiments import hermite_case, overview_case, scenes
 from experiments.common import run_folder
 from experiments.paper_numbers import (CURRICULUM, GLOBAL_FAMILY, HERMITE, HIGHER_IS_BETTER, MAIN_COMPARISON,
                                        METRIC_NAMES, METRICS, TOPOLOGY_STRESS, TWOSTAGE, PaperTable)
-from experiments.sweep_plan import PAPER_PLAN, RunSpec, active_trainers, expand, run_state
+from experiments.sweep_plan import PAPER_PLAN, TRAINERS, RunSpec, active_trainers, expand, run_state
 from np_sim.cli import cli_boundary
 
 SEEDS = (0, 1, 2)
@@ -102,7 +105,8 @@ def state_text(run: RunSpec, state) -> str:
         return "not trained yet (not started)"
     if state.kind in ("training now", "interrupted", "started, no snapshot"):
         word = "training" if state.kind == "training now" else state.kind
-        return f"not trained yet ({word}, epoch {state.epoch} of {run.epochs})"
+        unit = TRAINERS[run.config.trainer][0].rstrip("s")
+        return f"not trained yet ({word}, {unit} {state.epoch} of {run.epochs})"
     return f"not usable ({state.kind}: {state.detail})"
 
 
@@ -115,9 +119,20 @@ def read_records(path: Path) -> list[dict]:
                 for row in csv.DictReader(fh)]
 
 
+def evaluation_missing(arm: Arm, run: RunSpec) -> str:
+    """Why ``arm`` cannot be evaluated on ``run``'s checkpoint (empty when it can): an adapted-HOPE checkpoint has
+    no staged or ensemble-swapped evaluation here."""
+    if run.config.trainer == "hope_policy.train" and arm.evaluation != "own":
+        return f"trained; the {arm.evaluation} evaluation of an adapted-HOPE checkpoint is not built yet"
+    return ""
+
+
 def evaluation_argv(arm: Arm, run: RunSpec, folder: Path) -> list[str]:
-    """The experiment CLI that writes ``folder``'s records for ``run``'s selected checkpoint (``best.pt``)."""
-    checkpoint, benchmark = str(run.run_dir / "best.pt"), run.config.benchmark
+    """The experiment CLI that writes ``folder``'s records for ``run``'s output checkpoint (`RunSpec.output`)."""
+    checkpoint, benchmark = str(run.output), run.config.benchmark
+    if run.config.trainer == "hope_policy.train":
+        return [sys.executable, "-m", "experiments.planners", "--benchmark", benchmark, "--methods", "hope",
+                "--hope-checkpoint", checkpoint, "--out", str(folder)]
     if arm.evaluation == "staged":
         return [sys.executable, "-m", "experiments.planners", "--benchmark", benchmark, "--checkpoint", checkpoint,
                 "--methods", "staged_astar_np", "--out", str(folder)]
@@ -126,18 +141,27 @@ def evaluation_argv(arm: Arm, run: RunSpec, folder: Path) -> list[str]:
     return argv + (["--connector", "ensemble"] if arm.evaluation == "ensemble" else [])
 
 
+def row_seconds(row: dict, steps: int) -> float:
+    """Wall-clock seconds of one ``metrics.jsonl`` row: its ``epoch_s``, its steps over ``steps_per_s`` in older
+    rows (the same quantity, `np_policy.train`), or an adapted-HOPE update's ``collect_s + update_s``
+    (`hope_policy.train`); ``steps`` is the previous row's ``env_steps``."""
+    if "epoch_s" in row:
+        return float(row["epoch_s"])
+    if "collect_s" in row:
+        return float(row["collect_s"]) + float(row["update_s"])
+    return (int(row["env_steps"]) - steps) / float(row["steps_per_s"])
+
+
 def epoch_hours(metrics: Path) -> float:
-    """Wall-clock hours of a run's epochs: each row's ``epoch_s``, or its steps over ``steps_per_s`` in older
-    rows (the same quantity, `np_policy.train`)."""
+    """Wall-clock hours of a run's epochs (updates, for the adapted HOPE): the sum of `row_seconds`."""
     if not metrics.exists():
         return 0.0
     seconds, steps = 0.0, 0
     for line in metrics.read_text(errors="replace").splitlines():
         try:
             row = json.loads(line)
-            done = int(row["env_steps"])
-            seconds += float(row["epoch_s"]) if "epoch_s" in row else (done - steps) / float(row["steps_per_s"])
-            steps = done
+            seconds += row_seconds(row, steps)
+            steps = int(row["env_steps"])
         except (ValueError, KeyError, TypeError, ZeroDivisionError):
             continue
     return seconds / 3600.0
@@ -153,6 +177,9 @@ def measure(arm: Arm, runs: dict, episodes: int, evaluate: bool, active: dict) -
             result.missing[seed] = state_text(run, state)
             continue
         folder = run.run_dir / EVAL_FOLDERS[arm.evaluation].format(benchmark=run.config.benchmark)
+        if evaluation_missing(arm, run):
+            result.missing[seed] = evaluation_missing(arm, run)
+            continue
         if not (folder / "records.csv").exists():
             if folder.exists() and any(folder.iterdir()):
                 result.missing[seed] = f"trained; {folder} holds an interrupted evaluation (remove it to re-run)"

@@ -53,7 +53,7 @@ measured as process CPU time with the machine's two cores shared by other jobs, 
 times longer)."""
 TRAINERS = {"np_policy.train": ("epoch", "best.pt"), "hope_policy.train": ("episodes", "final.pt")}
 """The modules that train a configuration (``python -m``): the ``metrics.jsonl`` field that counts a run's progress
-and the file a finished run holds."""
+and the file a finished run holds (its output, the checkpoint that is evaluated; `run_output`)."""
 TABLES = {
     "main": "Fig. 3, main comparison on the Factorial benchmark",
     "staged": "Table II, unified versus staged planning",
@@ -165,6 +165,12 @@ class RunSpec:
     def name(self) -> str:
         """The run folder's name."""
         return self.run_dir.name
+
+    @property
+    def output(self) -> Path:
+        """The checkpoint a finished run holds and the reproduction evaluates (`TRAINERS`): NeuralParker's selected
+        ``best.pt``, the adapted HOPE's ``final.pt``."""
+        return self.run_dir / TRAINERS[self.config.trainer][1]
 
 
 @dataclass(frozen=True)
@@ -297,15 +303,14 @@ def run_state(run: RunSpec, active: dict[Path, int] | None = None) -> RunState:
     """The state of ``run``'s folder (see the module docstring)."""
     if run.overrides is None:
         return RunState("not available yet", detail=run.config.missing)
-    key, finished_file = TRAINERS[run.config.trainer]
-    epoch = metrics_epoch(run.run_dir / "metrics.jsonl", key)
+    epoch = metrics_epoch(run.run_dir / "metrics.jsonl", TRAINERS[run.config.trainer][0])
     pid = (active or {}).get(run.run_dir.resolve())
     if pid is not None:
         return RunState("training now", epoch, f"pid {pid}")
     conflicts = config_conflicts(run)
     if conflicts:
         return RunState("config differs", epoch, "; ".join(conflicts))
-    if epoch >= run.epochs and (run.run_dir / finished_file).exists():
+    if epoch >= run.epochs and run.output.exists():
         return RunState("finished", epoch)
     if (run.run_dir / "snapshot.pt").exists():
         return RunState("interrupted", epoch)
@@ -339,12 +344,13 @@ def estimate_hours(run: RunSpec, state: RunState) -> float | None:
     return None if left is None else left * run.config.epoch_s / 3600
 
 
-def describe(state: RunState) -> str:
-    """One phrase for a state: "interrupted at epoch 50", "finished (240 epochs)", ..."""
+def describe(state: RunState, unit: str = "epoch") -> str:
+    """One phrase for a state: "interrupted at epoch 50", "finished (240 epochs)", ...; ``unit`` is what the run
+    counts (the adapted HOPE: "episode")."""
     if state.kind == "finished":
-        return f"finished ({state.epoch} epochs)"
+        return f"finished ({state.epoch} {unit}s)"
     if state.kind in ("interrupted", "started, no snapshot", "training now"):
-        text = f"{state.kind} at epoch {state.epoch}"
+        text = f"{state.kind} at {unit} {state.epoch}"
         return f"{text} ({state.detail})" if state.detail else text
     return f"{state.kind}: {state.detail}" if state.detail else state.kind
 
@@ -357,7 +363,8 @@ def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
         hours = estimate_hours(run, state)
         total += hours or 0.0
         shown = "?" if hours is None else f"{hours:.1f}"
-        lines.append(f"{run.name:<38} {','.join(run.config.tables):<34} {shown:>11}  {describe(state)}")
+        lines.append(f"{run.name:<38} {','.join(run.config.tables):<34} {shown:>11}  "
+                     f"{describe(state, TRAINERS[run.config.trainer][0].rstrip('s'))}")
     unknown = sum(estimate_hours(r, s) is None for r, s in zip(runs, states))
     lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine (an estimate: {FACTORIAL_EPOCH_S} s "
                  f"per Factorial or Topology-Stress epoch, {SITE_EPOCH_S} s per site epoch, {HOPE_EPISODE_S} s per "

@@ -14,8 +14,8 @@ from shapely.geometry import Point
 
 from cli_helpers import one_error_line
 from experiments import hermite_case, overview_case, paper, scenes
-from experiments.paper import (ARMS, CLAIMS, Arm, ArmResult, Claim, claim_verdict, compare, epoch_hours, measure,
-                               summarise)
+from experiments.paper import (ARMS, CLAIMS, Arm, ArmResult, Claim, claim_verdict, compare, epoch_hours,
+                               evaluation_argv, measure, summarise)
 from experiments.paper_numbers import METRICS, TABLES
 from experiments.sweep_plan import PAPER_PLAN, expand
 from np_sim.benchmarks import load_benchmark
@@ -139,6 +139,30 @@ def test_measure_counts_only_finished_evaluated_seeds(tmp_path):
     assert hope.seeds_text() == "0 of 3 seeds: not trained yet (not started)"
     backbone = measure(Arm("HOPE-style, none", "topology_hopestyle_none"), runs, 720, False, {})
     assert backbone.seeds_text() == "0 of 3 seeds: not available yet (the HOPE-style backbone is not built yet)"
+
+
+def test_a_finished_adapted_hope_run_is_read_from_final_pt_and_its_planner_records(tmp_path):
+    runs = {(r.config.name, r.seed): r for r in expand(PAPER_PLAN, (0, 1, 2), tmp_path)}
+    seed0 = tmp_path / "factorial_hope_seed0"
+    seed0.mkdir()
+    rows = [{"update": u, "episodes": 3400 * u, "env_steps": 8192 * u, "collect_s": 10.0, "update_s": 50.0}
+            for u in (1, 2, 3)]
+    (seed0 / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    (seed0 / "eval_factorial").mkdir()
+    (seed0 / "eval_factorial" / "records.csv").write_text(
+        "scene,start_id,success,L,reversals,delta_kappa,plan_time_ms\na,0,1,10.0,1,0.5,3.0\n")
+    hope = Arm("Adapted HOPE", "factorial_hope")
+    assert measure(hope, runs, 1, False, {}).missing[0] == "not trained yet (started, no snapshot, episode 10200 of " \
+        "10000)"  # no final.pt: not finished, whatever the episode count
+    (seed0 / "final.pt").write_bytes(b"")
+    measured = measure(hope, runs, 1, False, {})
+    assert sorted(measured.records) == [0] and measured.seeds_text().startswith("1 of 3 (seed 0; seed 1: not trained")
+    staged = measure(Arm("Hybrid A* → HOPE", "factorial_hope", "staged"), runs, 1, False, {})
+    assert "staged evaluation of an adapted-HOPE checkpoint is not built yet" in staged.missing[0]
+    argv = evaluation_argv(hope, runs[("factorial_hope", 0)], seed0 / "eval_factorial")
+    assert argv[1:] == ["-m", "experiments.planners", "--benchmark", "factorial", "--methods", "hope",
+                        "--hope-checkpoint", str(seed0 / "final.pt"), "--out", str(seed0 / "eval_factorial")]
+    assert epoch_hours(seed0 / "metrics.jsonl") == pytest.approx(3 * 60.0 / 3600)
 
 
 def test_scene_examples_grid_and_png(tmp_path):
