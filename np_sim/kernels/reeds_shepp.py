@@ -62,83 +62,109 @@ def _tau_omega(u: float, v: float, xi: float, eta: float, phi: float):
     return tau, wrap_angle(tau - u + v - phi)
 
 
-@njit(cache=True, error_model="numpy")
-def _base_word(k: int, x: float, y: float, phi: float, out: np.ndarray) -> bool:
-    """Solve base word k (Reeds–Shepp formula 8.1–8.11) for the normalised goal (x, y, φ).
+# The base formulas: each takes the normalised goal (x, y, φ) with sp = sin φ, cp = cos φ, writes the signed
+# normalised piece lengths into out (5,) and returns whether the word exists with the gear pattern of its name.
 
-    Writes the signed normalised piece lengths into ``out`` (5,) and returns whether the word exists with the
-    gear pattern of its name.
-    """
-    sp, cp = math.sin(phi), math.cos(phi)
-    if k == 0:  # 8.1 LSL
-        xi, eta = x - sp, y - 1.0 + cp
-        u = math.hypot(xi, eta)
-        t = math.atan2(eta, xi)
-        v = wrap_angle(phi - t)
-        out[0], out[1], out[2] = t, u, v
-        return t >= -_ZERO and v >= -_ZERO
-    if k == 1:  # 8.2 LSR
-        xi, eta = x + sp, y - 1.0 - cp
-        rho2 = xi * xi + eta * eta
-        if rho2 < 4.0:
-            return False
-        u = math.sqrt(rho2 - 4.0)
-        t = wrap_angle(math.atan2(eta, xi) + math.atan2(2.0, u))
-        v = wrap_angle(t - phi)
-        out[0], out[1], out[2] = t, u, v
-        return t >= -_ZERO and v >= -_ZERO
-    if k == 2:  # 8.3/8.4 L+R−L (the last turn's gear is free: C|C|C and C|CC)
-        xi, eta = x - sp, y - 1.0 + cp
-        rho = math.hypot(xi, eta)
-        if rho > 4.0:
-            return False
-        u = -2.0 * math.asin(0.25 * rho)
-        t = wrap_angle(math.atan2(eta, xi) + 0.5 * u + math.pi)
-        v = wrap_angle(phi - t + u)
-        out[0], out[1], out[2] = t, u, v
-        return t >= -_ZERO and u <= _ZERO
-    if k == 3:  # 8.7 L+ R+u L−u R−
-        xi, eta = x + sp, y - 1.0 - cp
-        rho = 0.25 * (2.0 + math.hypot(xi, eta))
-        if rho > 1.0:
-            return False
-        u = math.acos(rho)
-        t, v = _tau_omega(u, -u, xi, eta, phi)
-        out[0], out[1], out[2], out[3] = t, u, -u, v
-        return t >= -_ZERO and v <= _ZERO
-    if k == 4:  # 8.8 L+ R−u L−u R+
-        xi, eta = x + sp, y - 1.0 - cp
-        rho = (20.0 - xi * xi - eta * eta) / 16.0
-        if rho < 0.0 or rho > 1.0:
-            return False
-        u = -math.acos(rho)
-        if u < -_HALF_PI:
-            return False
-        t, v = _tau_omega(u, u, xi, eta, phi)
-        out[0], out[1], out[2], out[3] = t, u, u, v
-        return t >= -_ZERO and v >= -_ZERO
-    if k == 5:  # 8.9 L+ R−π/2 S− L−
-        xi, eta = x - sp, y - 1.0 + cp
-        rho = math.hypot(xi, eta)
-        if rho < 2.0:
-            return False
-        r = math.sqrt(rho * rho - 4.0)
-        u = 2.0 - r
-        t = wrap_angle(math.atan2(eta, xi) + math.atan2(r, -2.0))
-        v = wrap_angle(phi - _HALF_PI - t)
-        out[0], out[1], out[2], out[3] = t, -_HALF_PI, u, v
-        return t >= -_ZERO and u <= _ZERO and v <= _ZERO
-    if k == 6:  # 8.10 L+ R−π/2 S− R−
-        xi, eta = x + sp, y - 1.0 - cp
-        rho = math.hypot(xi, eta)
-        if rho < 2.0:
-            return False
-        t = math.atan2(xi, -eta)
-        u = 2.0 - rho
-        v = wrap_angle(t + _HALF_PI - phi)
-        out[0], out[1], out[2], out[3] = t, -_HALF_PI, u, v
-        return t >= -_ZERO and u <= _ZERO and v <= _ZERO
-    # k == 7: 8.11 L+ R−π/2 S− L−π/2 R+
+
+@njit(cache=True, error_model="numpy")
+def _lsl(x: float, y: float, phi: float, sp: float, cp: float, out: np.ndarray) -> bool:
+    """Formula 8.1, L+ S+ L+."""
+    xi, eta = x - sp, y - 1.0 + cp
+    u = math.hypot(xi, eta)
+    t = math.atan2(eta, xi)
+    v = wrap_angle(phi - t)
+    out[0], out[1], out[2] = t, u, v
+    return t >= -_ZERO and v >= -_ZERO
+
+
+@njit(cache=True, error_model="numpy")
+def _lsr(x: float, y: float, phi: float, sp: float, cp: float, out: np.ndarray) -> bool:
+    """Formula 8.2, L+ S+ R+."""
+    xi, eta = x + sp, y - 1.0 - cp
+    rho2 = xi * xi + eta * eta
+    if rho2 < 4.0:
+        return False
+    u = math.sqrt(rho2 - 4.0)
+    t = wrap_angle(math.atan2(eta, xi) + math.atan2(2.0, u))
+    v = wrap_angle(t - phi)
+    out[0], out[1], out[2] = t, u, v
+    return t >= -_ZERO and v >= -_ZERO
+
+
+@njit(cache=True, error_model="numpy")
+def _lrl(x: float, y: float, phi: float, sp: float, cp: float, out: np.ndarray) -> bool:
+    """Formulas 8.3/8.4, L+ R− L (the last turn's gear is free: C|C|C and C|CC)."""
+    xi, eta = x - sp, y - 1.0 + cp
+    rho = math.hypot(xi, eta)
+    if rho > 4.0:
+        return False
+    u = -2.0 * math.asin(0.25 * rho)
+    t = wrap_angle(math.atan2(eta, xi) + 0.5 * u + math.pi)
+    v = wrap_angle(phi - t + u)
+    out[0], out[1], out[2] = t, u, v
+    return t >= -_ZERO and u <= _ZERO
+
+
+@njit(cache=True, error_model="numpy")
+def _lrlr_forward(x: float, y: float, phi: float, sp: float, cp: float, out: np.ndarray) -> bool:
+    """Formula 8.7, L+ R+u L−u R−."""
+    xi, eta = x + sp, y - 1.0 - cp
+    rho = 0.25 * (2.0 + math.hypot(xi, eta))
+    if rho > 1.0:
+        return False
+    u = math.acos(rho)
+    t, v = _tau_omega(u, -u, xi, eta, phi)
+    out[0], out[1], out[2], out[3] = t, u, -u, v
+    return t >= -_ZERO and v <= _ZERO
+
+
+@njit(cache=True, error_model="numpy")
+def _lrlr_reverse(x: float, y: float, phi: float, sp: float, cp: float, out: np.ndarray) -> bool:
+    """Formula 8.8, L+ R−u L−u R+."""
+    xi, eta = x + sp, y - 1.0 - cp
+    rho = (20.0 - xi * xi - eta * eta) / 16.0
+    if rho < 0.0 or rho > 1.0:
+        return False
+    u = -math.acos(rho)
+    if u < -_HALF_PI:
+        return False
+    t, v = _tau_omega(u, u, xi, eta, phi)
+    out[0], out[1], out[2], out[3] = t, u, u, v
+    return t >= -_ZERO and v >= -_ZERO
+
+
+@njit(cache=True, error_model="numpy")
+def _lrsl(x: float, y: float, phi: float, sp: float, cp: float, out: np.ndarray) -> bool:
+    """Formula 8.9, L+ R−π/2 S− L−."""
+    xi, eta = x - sp, y - 1.0 + cp
+    rho = math.hypot(xi, eta)
+    if rho < 2.0:
+        return False
+    r = math.sqrt(rho * rho - 4.0)
+    u = 2.0 - r
+    t = wrap_angle(math.atan2(eta, xi) + math.atan2(r, -2.0))
+    v = wrap_angle(phi - _HALF_PI - t)
+    out[0], out[1], out[2], out[3] = t, -_HALF_PI, u, v
+    return t >= -_ZERO and u <= _ZERO and v <= _ZERO
+
+
+@njit(cache=True, error_model="numpy")
+def _lrsr(x: float, y: float, phi: float, sp: float, cp: float, out: np.ndarray) -> bool:
+    """Formula 8.10, L+ R−π/2 S− R−."""
+    xi, eta = x + sp, y - 1.0 - cp
+    rho = math.hypot(xi, eta)
+    if rho < 2.0:
+        return False
+    t = math.atan2(xi, -eta)
+    u = 2.0 - rho
+    v = wrap_angle(t + _HALF_PI - phi)
+    out[0], out[1], out[2], out[3] = t, -_HALF_PI, u, v
+    return t >= -_ZERO and u <= _ZERO and v <= _ZERO
+
+
+@njit(cache=True, error_model="numpy")
+def _lrslr(x: float, y: float, phi: float, sp: float, cp: float, out: np.ndarray) -> bool:
+    """Formula 8.11, L+ R−π/2 S− L−π/2 R+."""
     xi, eta = x + sp, y - 1.0 - cp
     rho = math.hypot(xi, eta)
     if rho < 2.0:
@@ -150,6 +176,32 @@ def _base_word(k: int, x: float, y: float, phi: float, out: np.ndarray) -> bool:
     v = wrap_angle(t - phi)
     out[0], out[1], out[2], out[3], out[4] = t, -_HALF_PI, u, -_HALF_PI, v
     return t >= -_ZERO and v >= -_ZERO
+
+
+@njit(cache=True, error_model="numpy")
+def _base_word(k: int, x: float, y: float, phi: float, out: np.ndarray) -> bool:
+    """Solve base word k (Reeds–Shepp formula 8.1–8.11, the rows of ``_BASE_LETTERS``) for the normalised goal
+    (x, y, φ).
+
+    Writes the signed normalised piece lengths into ``out`` (5,) and returns whether the word exists with the
+    gear pattern of its name.
+    """
+    sp, cp = math.sin(phi), math.cos(phi)
+    if k == 0:
+        return _lsl(x, y, phi, sp, cp, out)
+    if k == 1:
+        return _lsr(x, y, phi, sp, cp, out)
+    if k == 2:
+        return _lrl(x, y, phi, sp, cp, out)
+    if k == 3:
+        return _lrlr_forward(x, y, phi, sp, cp, out)
+    if k == 4:
+        return _lrlr_reverse(x, y, phi, sp, cp, out)
+    if k == 5:
+        return _lrsl(x, y, phi, sp, cp, out)
+    if k == 6:
+        return _lrsr(x, y, phi, sp, cp, out)
+    return _lrslr(x, y, phi, sp, cp, out)
 
 
 @njit(cache=True, error_model="numpy")

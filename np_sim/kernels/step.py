@@ -79,21 +79,12 @@ def _sign(v: float) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, off_c, off_s, offsets, headings,
-             scales0,
-             scales1, basis, dbasis, pts, kbar_max, dk, lengths, costs, obs_row, R_row) -> None:
-    """Advance env i by the arc (κ, l) (already in physical units) and write its reward, flags and observation."""
-    k = int(S[i, S_SCENE])
-    target = targets[k]
-    x = S[i, S_X]
-    y = S[i, S_Y]
-    th = S[i, S_TH]
+def _step_reward(S, P, i, kappa: float, length: float) -> float:
+    """Step reward (eq:step-reward) of env i's arc (κ, l), updating its reversal count and the sums of the terminal
+    reward (eq:effective-kappa); the history terms are zero on the first arc."""
     first = S[i, S_N_ARCS] == 0.0
     prev_k = S[i, S_PREV_KAPPA]
     prev_l = S[i, S_PREV_L]
-    footprint = P[P_FOOTPRINT] > 0.0
-
-    # step reward (eq:step-reward); history terms are zero on the first arc
     short = max(0.0, P[P_R_SHORT_M] - abs(length))
     reward = -P[P_R_LEN] * abs(length) - P[P_R_STEP] - P[P_R_SHORT_W] * short * short
     if not first:
@@ -104,6 +95,57 @@ def step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, 
         S[i, S_DK_EFF] += abs(_sign(length) * kappa - _sign(prev_l) * prev_k)  # eq:effective-kappa
         S[i, S_SUM_DK] += abs(kappa - prev_k)
     S[i, S_SUM_LEN] += abs(length)
+    return reward
+
+
+@njit(cache=True, error_model="numpy")
+def _connect(geo, k, target, P, nx: float, ny: float, nth: float, kappa: float, local, offsets, headings, scales0,
+             scales1, basis, dbasis, pts, kbar_max, dk, lengths, costs):
+    """The gated Hermite connector (eq:hermite … eq:mincost) from the reached pose (nx, ny, nth) of scene k:
+    (index of the selected candidate or −1, whether it drives forward)."""
+    # target-frame reached pose (eq:target-frame)
+    a = 0.5 * math.pi - target[2]
+    ca = math.cos(a)
+    sa = math.sin(a)
+    dx = nx - target[0]
+    dy = ny - target[1]
+    xt = ca * dx - sa * dy
+    yt = sa * dx + ca * dy
+    tht = wrap_angle(nth - target[2] + 0.5 * math.pi)
+    if not (P[P_GATE] == 0.0 or math.sin(tht) > 0.0):
+        return -1, False
+    forward = yt < 0.0
+    n_cand = build_candidates(xt, yt, tht, forward, kappa, offsets, headings, scales0, scales1, basis, P[P_SEL_DK],
+                              P[P_SEL_LEN], P[P_SEL_CONST], pts, kbar_max, dk, lengths, costs)
+    ensemble = P[P_ENSEMBLE] > 0.0
+    hermite = select_candidate(geo, k, target, xt, yt, tht, forward, offsets, headings, scales0, scales1, dbasis, pts,
+                               kbar_max, costs, n_cand, ensemble, P[P_CONN_KAPPA_MAX], P[P_FOOTPRINT] > 0.0, local)
+    return hermite, forward
+
+
+@njit(cache=True, error_model="numpy")
+def _success_reward(S, P, i, hermite: int, h_len: float, h_dk: float) -> float:
+    """Success reward of env i (eq:terminal-reward), with the connector's penalty when it closed the episode."""
+    p_h = 0.0
+    if hermite >= 0:
+        p_h = -(P[P_R_H_DK] * h_dk + P[P_R_H_LEN] * h_len + P[P_R_H_CONST])
+        if P[P_ENSEMBLE] > 0.0:
+            p_h = max(p_h, P[P_R_H_FLOOR])
+    return (P[P_R_BONUS] - P[P_R_SUCC_REV] * S[i, S_N_REV] - P[P_R_SUCC_DK] * S[i, S_DK_EFF]
+            + P[P_R_H_W] * p_h)
+
+
+@njit(cache=True, error_model="numpy")
+def step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, off_c, off_s, offsets, headings,
+             scales0, scales1, basis, dbasis, pts, kbar_max, dk, lengths, costs, obs_row, R_row) -> None:
+    """Advance env i by the arc (κ, l) (already in physical units) and write its reward, flags and observation."""
+    k = int(S[i, S_SCENE])
+    target = targets[k]
+    x = S[i, S_X]
+    y = S[i, S_Y]
+    th = S[i, S_TH]
+    footprint = P[P_FOOTPRINT] > 0.0
+    reward = _step_reward(S, P, i, kappa, length)
 
     # execute the arc, checked at samples_per_arc points (eq:arc)
     corners = np.empty((4, 2))
@@ -131,38 +173,16 @@ def step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, 
         if dist <= P[P_POS_TOL] and abs(wrap_angle(nth - target[2])) <= P[P_HEAD_TOL]:
             success = True
         else:
-            # target-frame reached pose (eq:target-frame)
-            a = 0.5 * math.pi - target[2]
-            ca = math.cos(a)
-            sa = math.sin(a)
-            dx = nx - target[0]
-            dy = ny - target[1]
-            xt = ca * dx - sa * dy
-            yt = sa * dx + ca * dy
-            tht = wrap_angle(nth - target[2] + 0.5 * math.pi)
-            if P[P_GATE] == 0.0 or math.sin(tht) > 0.0:
-                forward = yt < 0.0
-                n_cand = build_candidates(xt, yt, tht, forward, kappa, offsets, headings, scales0, scales1, basis,
-                                          P[P_SEL_DK], P[P_SEL_LEN], P[P_SEL_CONST], pts, kbar_max, dk, lengths,
-                                          costs)
-                ensemble = P[P_ENSEMBLE] > 0.0
-                hermite = select_candidate(geo, k, target, xt, yt, tht, forward, offsets, headings, scales0, scales1,
-                                           dbasis, pts, kbar_max, costs, n_cand, ensemble, P[P_CONN_KAPPA_MAX],
-                                           footprint, local)
-                if hermite >= 0:
-                    success = True
-                    h_len = lengths[hermite]
-                    h_dk = dk[hermite]
-                    h_cost = costs[hermite]
-                    h_fwd = 1.0 if forward else -1.0
-        if success:
-            p_h = 0.0
+            hermite, forward = _connect(geo, k, target, P, nx, ny, nth, kappa, local, offsets, headings, scales0,
+                                        scales1, basis, dbasis, pts, kbar_max, dk, lengths, costs)
             if hermite >= 0:
-                p_h = -(P[P_R_H_DK] * h_dk + P[P_R_H_LEN] * h_len + P[P_R_H_CONST])
-                if P[P_ENSEMBLE] > 0.0:
-                    p_h = max(p_h, P[P_R_H_FLOOR])
-            reward += (P[P_R_BONUS] - P[P_R_SUCC_REV] * S[i, S_N_REV] - P[P_R_SUCC_DK] * S[i, S_DK_EFF]
-                       + P[P_R_H_W] * p_h)  # eq:terminal-reward
+                success = True
+                h_len = lengths[hermite]
+                h_dk = dk[hermite]
+                h_cost = costs[hermite]
+                h_fwd = 1.0 if forward else -1.0
+        if success:
+            reward += _success_reward(S, P, i, hermite, h_len, h_dk)  # eq:terminal-reward
             terminated = True
     truncated = (not terminated) and S[i, S_N_ARCS] >= P[P_MAX_ARCS]
 
