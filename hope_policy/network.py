@@ -1,7 +1,10 @@
 """The adapted HOPE actor and critic (paper §IV-B, App. ``app:hope-adaptation``; HOPE's ``MultiObsEmbedding``).
 
-Each active modality (LiDAR, target, and the action mask when it is used) is embedded in 128-D by
-``Linear → tanh → Linear``; the embeddings form a sequence of tokens fused by one pre-norm attention block
+Each active modality (LiDAR, target, the action mask when it is used, and the added scene input of a HOPE-style
+backbone) is embedded in 128-D: a flat vector (LiDAR, target, mask, the target-relative vertices) by
+``Linear → tanh → Linear``; the BEV raster's frozen-autoencoder latent (`hope_policy.inputs`) by HOPE's
+re-embedding of its image latent, ``tanh → Linear``. The embeddings form a sequence of tokens fused by one pre-norm
+attention block
 (eight 32-D heads, a 128-unit tanh feed-forward sublayer, residual connections); the flattened tokens pass a
 128-unit tanh hidden layer to the output. The actor's output is squashed by tanh and is the mean of a diagonal
 Gaussian over the normalised 2-D action with a state-independent learned log standard deviation (initially 0);
@@ -31,10 +34,17 @@ class Modalities:
     """Input branches of a network: name and feature count of each flat vector input, in token order."""
 
     sizes: tuple[tuple[str, int], ...]
-    """(observation key, features) pairs, e.g. (("lidar", 120), ("target", 5), ("action_mask", 42))."""
+    """(observation key, features) pairs, e.g. (("lidar", 120), ("target", 5), ("action_mask", 42)); for ``bev``
+    the latent size of its frozen encoder."""
 
 
-def _embedding(features: int) -> nn.Sequential:
+LATENT_KEYS = ("bev",)
+"""Inputs that are a frozen encoder's latent, re-embedded as HOPE's ``re_embed_img`` (tanh → Linear)."""
+
+
+def _embedding(key: str, features: int) -> nn.Sequential:
+    if key in LATENT_KEYS:
+        return nn.Sequential(nn.Tanh(), nn.Linear(features, EMBED))
     return nn.Sequential(nn.Linear(features, EMBED), nn.Tanh(), nn.Linear(EMBED, EMBED))
 
 
@@ -65,7 +75,7 @@ class FusionNetwork(nn.Module):
     def __init__(self, modalities: Modalities, output: int, tanh_output: bool):
         super().__init__()
         self.keys = tuple(key for key, _ in modalities.sizes)
-        self.embed = nn.ModuleDict({key: _embedding(n) for key, n in modalities.sizes})
+        self.embed = nn.ModuleDict({key: _embedding(key, n) for key, n in modalities.sizes})
         self.block = AttentionBlock()
         self.head = nn.Sequential(nn.Linear(len(self.keys) * EMBED, HIDDEN), nn.Tanh(), nn.Linear(HIDDEN, output))
         self.tanh_output = tanh_output

@@ -1,22 +1,24 @@
 """Train the adapted HOPE policy with HOPE's PPO for 10,000 episodes (paper §IV-B, App. ``app:hope-adaptation``).
 
 ``python -m hope_policy.train --benchmark factorial|topology --seed S --out DIR [--resume|--overwrite]
-[--episodes N] [--input none|bev|vertices] [--no-mask] [--no-takeover] [--curriculum-scale 0.05]``
+[--episodes N] [--input none|bev|vertices] [--bev-encoder FILE] [--no-mask] [--no-takeover] [--curriculum-scale 0.05]
+[--config FILE]``
 
 A run reads top to bottom: build ``num_envs`` adapted-HOPE envs on the benchmark's training scenes (full-range
 starts, or the geodesic start curriculum with ``--curriculum-scale``), then repeat: collect ``batch_size`` (8,192)
-transitions, normalising the LiDAR, target and vertex branches with running statistics updated by every observation
-a step returns; run one PPO update (`hope_policy.ppo`); count the episodes that ended in the batch. Training stops
+transitions (a BEV raster replaced by its frozen encoder's latent, `hope_policy.inputs`), normalising the LiDAR,
+target and vertex branches with running statistics updated by every observation a step returns; run one PPO update
+(`hope_policy.ppo`); count the episodes that ended in the batch. Training stops
 after the update whose batch completes episode ``--episodes`` (10,000), and ``final.pt`` holds that policy with its
 normalisation statistics: the checkpoint that is evaluated, with no selection.
 
 Each collect starts every env on a fresh episode, drawn from a seed derived from the run seed and the update
 index, and the episodes still running when the batch is full are cut there (their last step bootstrapped from the
 critic, as a truncation) and not counted. That makes an update boundary a complete description of the run's
-state: ``snapshot.pt`` (every ``snapshot_every`` updates, and where ``max_updates`` stops a run) holds the weights, both optimisers, the
-critic copy, the normalisation statistics, the counters and the generator states, and a run resumed from it
-computes bit for bit what the uninterrupted run computes. A finished run keeps only its outputs: once ``final.pt``
-is written the snapshot is removed, and ``--resume`` on a finished run says so and trains nothing.
+state: ``snapshot.pt`` (every ``snapshot_every`` updates, and where ``max_updates`` stops a run) holds the weights,
+both optimisers, the critic copy, the normalisation statistics, the counters and the generator states, and a run
+resumed from it computes bit for bit what the uninterrupted run computes. A finished run keeps only its outputs:
+once ``final.pt`` is written the snapshot is removed, and ``--resume`` on a finished run trains nothing.
 ``metrics.jsonl`` gets one line per update and TensorBoard event files beside it hold the same scalars.
 """
 
@@ -39,13 +41,14 @@ from hope_policy.action_mask import apply_mask
 from hope_policy.checkpoint import load_hope_checkpoint, save_hope_checkpoint
 from hope_policy.config import ADDED_INPUTS, HopeEnvConfig
 from hope_policy.env import HopeVectorEnv
-from hope_policy.network import HopeActorCritic, Modalities
+from hope_policy.inputs import PolicyInputs
+from hope_policy.network import HopeActorCritic
 from hope_policy.normalization import ObservationNormaliser
 from hope_policy.ppo import HopePPO, HopePPOConfig
 from hope_policy.spaces import observation_space
 from np_policy.checkpoint import CheckpointError, check_config, load_weights, write_atomic
-from np_policy.config import check_types
-from np_policy.train import merge_config, prepare_run_folder, read_metrics, write_metrics
+from np_policy.config import CURRICULUM_REGIONS, check_types
+from np_policy.train import curriculum_scenes, merge_config, prepare_run_folder, read_metrics, write_metrics
 from np_sim.benchmarks import load_benchmark
 from np_sim.cli import cli_boundary, non_negative_int, positive_float, positive_int
 from np_sim.config import config_from_dict
@@ -76,6 +79,12 @@ class HopeTrainConfig:
     """Updates between snapshots (one is also written at the end)."""
     curriculum_pool: int = 256
     """Start poses per scene in the geodesic curriculum pool (when ``env.curriculum.enabled``)."""
+    curriculum_region: str = "start_region"
+    """Where the curriculum pool is drawn: each scene's start region, or 'lot' (the whole drivable lot), as
+    ``np_policy.config.TrainConfig.curriculum_region``; the Table III rows use the NeuralParker recipe's 'lot'."""
+    bev_encoder_file: str = ""
+    """The pretrained BEV autoencoder file (``python -m np_policy.bev_encoder``) of ``env.added_input='bev'``;
+    empty for the other inputs."""
     torch_threads: int = 1
     """torch intra-op threads, set again before every update: the envs' numba parallel loops reset the OpenMP
     thread count, and a sum split over another number of threads can differ in its last bit."""
@@ -91,9 +100,13 @@ class HopeTrainConfig:
         if self.ppo.batch_size % self.num_envs:
             raise ConfigError(f"HopeTrainConfig.num_envs: ppo.batch_size={self.ppo.batch_size} must be a multiple "
                               f"of num_envs, got {self.num_envs}")
-        if self.env.added_input != "none":
-            raise ConfigError(f"HopeTrainConfig.env.added_input: the trainer builds the LiDAR, target and mask "
-                              f"branches only; {self.env.added_input!r} (a BEV or vertex branch) is not available")
+        if self.curriculum_region not in CURRICULUM_REGIONS:
+            raise ConfigError(f"HopeTrainConfig.curriculum_region: expected one of {CURRICULUM_REGIONS}, got "
+                              f"{self.curriculum_region!r}")
+        if (self.env.added_input == "bev") != bool(self.bev_encoder_file):
+            raise ConfigError(f"HopeTrainConfig.bev_encoder_file: expected the pretrained autoencoder file exactly "
+                              f"when env.added_input is 'bev', got {self.bev_encoder_file!r} with "
+                              f"{self.env.added_input!r}")
 
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict (JSON-safe)."""
@@ -104,11 +117,6 @@ class HopeTrainConfig:
         """Inverse of ``to_dict``; unknown keys and wrong types are a ConfigError naming the field."""
         check_types(cls, data)
         return config_from_dict(cls, data)
-
-
-def modalities(space) -> Modalities:
-    """The network's input branches for an observation space (`hope_policy.spaces.observation_space`)."""
-    return Modalities(tuple((key, int(np.prod(box.shape))) for key, box in space.spaces.items()))
 
 
 def collect_seed(seed: int, update: int) -> int:
@@ -131,12 +139,14 @@ class HopeTrainer:
         torch.manual_seed(config.seed)
         scenes = load_benchmark(config.benchmark, "train")
         schedule = config.env.curriculum
-        self.sampler = (CurriculumStartSampler(scenes, fraction=schedule.start_fraction,
+        self.sampler = (CurriculumStartSampler(curriculum_scenes(scenes, config.curriculum_region),
+                                               fraction=schedule.start_fraction,
                                                pool_size=config.curriculum_pool, seed=config.seed,
                                                vehicle=config.env.vehicle) if schedule.enabled else None)
         self.envs = HopeVectorEnv(scenes, config.num_envs, config.env, seed=config.seed, start_sampler=self.sampler)
         space = observation_space(config.env)
-        self.model = HopeActorCritic(modalities(space))
+        self.inputs = PolicyInputs(config.env, config.bev_encoder_file)
+        self.model = HopeActorCritic(self.inputs.modalities(space))
         self.ppo = HopePPO(self.model, config.ppo)
         self.normaliser = ObservationNormaliser({key: box.shape for key, box in space.spaces.items()})
         self.shuffle = np.random.default_rng(config.seed)
@@ -166,6 +176,7 @@ class HopeTrainer:
         if self.sampler is not None:
             self.sampler.set_progress(self.episodes / self.config.episodes, self.config.env.curriculum)
         obs, _ = self.envs.reset(seed=collect_seed(self.config.seed, self.updates))
+        obs = self.inputs(obs)
         if self.normaliser.stats and all(s.count == 0 for s in self.normaliser.stats.values()):
             self.normaliser.update(obs)  # HOPE initialises its statistics with the first observation
         steps: list[dict[str, Any]] = []
@@ -173,12 +184,14 @@ class HopeTrainer:
             obs_n = self.normaliser(obs)
             action, dist = self._act(obs, obs_n)
             obs, reward, terminated, truncated, info = self.envs.step(action)
+            obs = self.inputs(obs)
             # a takeover chunk replaces the policy's action; HOPE stores and scores the chunk
             executed = np.where(info["rs_takeover"][:, None], info["executed_action"], action).astype(np.float32)
             with torch.no_grad():
                 log_prob = dist.log_prob(torch.tensor(executed)).sum(-1).numpy()
             done = terminated | truncated
-            following = {key: np.where(_broadcast(done, value), info["final_obs"][key], value)
+            final = self.inputs(info["final_obs"]) if done.any() else None
+            following = {key: np.where(_broadcast(done, value), final[key], value)
                          for key, value in obs.items()} if done.any() else obs
             self.normaliser.update(following)
             steps.append({"obs": obs_n, "action": executed, "log_prob": log_prob, "reward": reward,
@@ -302,6 +315,7 @@ def train(config: HopeTrainConfig, out: str | Path, resume: bool = False, overwr
     if resume and not overwrite and (done := finished_rows(out, config)) is not None:
         (out / "snapshot.pt").unlink(missing_ok=True)  # left by a kill between final.pt and its removal
         return done
+    PolicyInputs(config.env, config.bev_encoder_file)  # refuses a missing BEV autoencoder before the folder is touched
     _prepare(out, resume, overwrite)
     trainer = HopeTrainer(config)
     metrics_path = out / "metrics.jsonl"
@@ -370,7 +384,8 @@ def build_config(args: argparse.Namespace) -> HopeTrainConfig:
     env = HopeEnvConfig(action_mask=not args.no_mask, rs_takeover=not args.no_takeover, added_input=args.input,
                         curriculum=CurriculumSchedule(enabled=args.curriculum_scale is not None,
                                                       start_fraction=args.curriculum_scale or 0.05))
-    flags = HopeTrainConfig(episodes=args.episodes, num_envs=args.num_envs, env=env).to_dict()
+    flags = dict(episodes=args.episodes, num_envs=args.num_envs, env=env.to_dict(),
+                 bev_encoder_file=str(args.bev_encoder or ""))
     data = merge_config(flags, read_config_file(args.config))
     data.update(benchmark=args.benchmark, seed=args.seed)
     return HopeTrainConfig.from_dict(data)
@@ -391,6 +406,8 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     mode.add_argument("--overwrite", action="store_true", help="replace the run in --out")
     parser.add_argument("--episodes", type=positive_int, default=10_000, help="episode budget (paper: 10,000)")
     parser.add_argument("--input", choices=ADDED_INPUTS, default="none", help="added scene input (Table III)")
+    parser.add_argument("--bev-encoder", type=Path, help="pretrained BEV autoencoder of --input bev "
+                        "(python -m np_policy.bev_encoder)")
     parser.add_argument("--no-mask", action="store_true", help="disable HOPE's action mask (and its branch)")
     parser.add_argument("--no-takeover", action="store_true", help="disable the Reeds-Shepp takeover")
     parser.add_argument("--curriculum-scale", type=positive_float, default=None,
