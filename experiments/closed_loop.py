@@ -40,6 +40,7 @@ import dataclasses
 import json
 import math
 import multiprocessing
+import os
 import time
 from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
@@ -90,8 +91,9 @@ class ClosedLoopConfig:
     """Lateral controller (`tracking.controllers.CONTROLLERS`)."""
     render_clips: int = 3
     """Clips (the first ones) whose recordings get off-screen camera frames."""
-    workers: int = 1
-    """Parallel processes (the records do not depend on it)."""
+    workers: int | None = None
+    """Parallel processes, None = one per core this process may use (`default_workers`), never more than the
+    clips. The records do not depend on it."""
     planner: PlannerOptions = SITE_PLANNERS
     """Checkpoints, NeuralParker presets and the searches' convention and margin (`experiments.registry`)."""
     clip_run: ClipRunConfig = field(default_factory=ClipRunConfig)
@@ -128,14 +130,15 @@ def clip_rows(clip, planners: dict[str, Any], controller: str, rrd_dir: Path | N
               config=None) -> list[dict]:
     """Run one clip with every planner (``config``: a `tracking.clip_run.ClipRunConfig`, default its defaults);
     one record row per planner."""
-    from tracking.clip_run import clip_world, object_of_geom, run_clip
+    from tracking.clip_run import clip_mujoco_world, clip_world, object_of_geom, run_clip
 
+    config = ClipRunConfig() if config is None else config
     ground = clip_world(clip)
+    world = clip_mujoco_world(clip, config.tracker, ground)  # compiled once, reset by each run
     rows = []
     for name, planner in planners.items():
         rrd = None if rrd_dir is None else rrd_path(rrd_dir, clip.name, name)
-        run = run_clip(clip, planner, controller, config=config, rerun_path=rrd,
-                       render=render)
+        run = run_clip(clip, planner, controller, config=config, rerun_path=rrd, render=render, world=world)
         rec, first = run.record, run.first_plan
         times = np.array([c.plan_time_s for c in run.calls]) * 1e3
         L, rev, _ = first.metrics() if first.success else (math.nan, -1, math.nan)
@@ -173,7 +176,20 @@ def split_clips(split: str) -> list:
     raise ConfigError(f"--split: expected one of {CLIP_SPLITS}, got {split!r}")
 
 
+def default_workers() -> int:
+    """One worker per CPU core this process may run on."""
+    return len(os.sched_getaffinity(0))
+
+
 def _init_worker(names: list[str], options: PlannerOptions, split: str) -> None:
+    # one thread each for torch, numba's parallel loops and Mesa's software renderer: the pool already has a
+    # process per core, and more threads than cores only wait on each other
+    import numba
+    import torch
+
+    os.environ["LP_NUM_THREADS"] = "1"  # read when the first off-screen GL context is made, after this
+    torch.set_num_threads(1)
+    numba.set_num_threads(1)
     _WORKER["clips"] = split_clips(split)
     _WORKER["planners"] = build_planners(names, options)
 
@@ -219,16 +235,17 @@ def clip_indices(clips: list, config: ClosedLoopConfig) -> list[int]:
     return [known[n] for n in config.clip_names]
 
 
-def drive(names: list[str], config: ClosedLoopConfig, indices: list[int], rrd_dir: Path | None,
+def drive(planners: dict[str, Any], config: ClosedLoopConfig, clips: list, indices: list[int], rrd_dir: Path | None,
           progress: bool) -> list[dict]:
-    """The record rows of every clip of ``indices`` × planner, in clip order, on ``config.workers`` processes."""
+    """The record rows of every clip of ``indices`` × planner, in clip order: with one worker on ``planners`` in
+    this process, else on ``config.workers`` processes, each building its own planners."""
+    names = list(planners)
     jobs = [(k, config.controller, rrd_dir, n < config.render_clips, config.clip_run) for n, k in enumerate(indices)]
     bar = tqdm(total=len(jobs) * len(names), desc="clips × planners in MuJoCo", unit="run", disable=not progress)
     results: list[list[dict]] = []
     if config.workers == 1:
-        _init_worker(names, config.planner, config.split)
-        for job in jobs:
-            results.append(_work(job))
+        for k, *settings in jobs:
+            results.append(clip_rows(clips[k], planners, *settings))
             bar.update(len(names))
     else:
         # spawn, not fork: the parent has torch's thread pool up (build_planners), and a forked child can deadlock
@@ -244,18 +261,22 @@ def drive(names: list[str], config: ClosedLoopConfig, indices: list[int], rrd_di
 
 def run(config: ClosedLoopConfig | None = None, out: Path | None = None, rrd: bool = True,
         progress: bool = True) -> dict[str, Any]:
-    """Run the clips × planners of ``config``; returns records, table text, folder, figure, merged recording and
-    wall time (see the module docstring)."""
+    """Run the clips × planners of ``config``; returns records, table text, folder, figure, merged recording, the
+    config it ran with (``workers`` resolved), the clips' wall time and the wall time of each phase (set-up: the
+    planners and clips; drive: the clips; outputs: the files and the merged recording)."""
+    start = time.perf_counter()
     config = ClosedLoopConfig() if config is None else config
     names, notes = planner_names(config)
     notes += planner_notes(names, config)
-    build_planners(names, config.planner)  # fail fast on a bad setting, before any work
+    planners = build_planners(names, config.planner)  # fails fast on a bad setting, before any work
     clips = split_clips(config.split)
     indices = clip_indices(clips, config)
+    # the count it ran with, in config.json too
+    config = dataclasses.replace(config, workers=min(config.workers or default_workers(), len(indices)))
     folder = run_folder("closed_loop", out)
     rrd_dir = folder / "rrd" if rrd else None
     wall0 = time.perf_counter()
-    records = drive(names, config, indices, rrd_dir, progress)
+    records = drive(planners, config, clips, indices, rrd_dir, progress)
     wall = time.perf_counter() - wall0
     table = format_table(records, names, config.split) + "\n\n" + "\n".join(notes)
     write_records(folder, records)
@@ -263,11 +284,12 @@ def run(config: ClosedLoopConfig | None = None, out: Path | None = None, rrd: bo
     figure = search_time_figure(records, folder / "search_time.png")
     written = [] if rrd_dir is None else [rrd_path(rrd_dir, clips[k].name, name) for k in indices for name in names]
     merged = merge_rrd([p for p in written if p.exists()], folder / "closed_loop.rrd")
+    phases = {"setup": wall0 - start, "drive": wall, "outputs": time.perf_counter() - wall0 - wall}
     (folder / "config.json").write_text(json.dumps(
         {"config": dataclasses.asdict(config), "planners": names, "clips": [clips[k].name for k in indices],
-         "wall_time_s": wall, "git_commit": git_commit()}, indent=2, default=str))
+         "wall_time_s": wall, "phase_times_s": phases, "git_commit": git_commit()}, indent=2, default=str))
     return {"records": records, "table": table, "folder": folder, "figure": figure, "rrd": merged,
-            "wall_time_s": wall}
+            "wall_time_s": wall, "phase_times_s": phases, "config": config}
 
 
 def _fmt(value: float, digits: int = 2) -> str:
@@ -389,7 +411,8 @@ def main(argv=None) -> dict[str, Any]:
                         help=f"paper-faithful site NeuralParker checkpoint of neuralparker and np_guided_astar "
                              f"(default {SITE_PLANNERS.checkpoint})")
     parser.add_argument("--no-render", action="store_true", help="no off-screen camera frames in the .rrd")
-    parser.add_argument("--workers", type=positive_int, default=1, help="parallel processes (default 1)")
+    parser.add_argument("--workers", type=positive_int, default=None,
+                        help=f"parallel processes (default one per core: {default_workers()} here)")
     parser.add_argument("--out", type=fresh_folder, default=None,
                         help="new or empty run folder (default: a fresh results/closed_loop/<time>)")
     parser.add_argument("--set", nargs="+", action="extend", default=[], metavar="KEY=VALUE", dest="overrides",
@@ -404,8 +427,11 @@ def main(argv=None) -> dict[str, Any]:
     result = run(apply_overrides(config, args.overrides), args.out)
     folder = result["folder"]
     print(result["table"])
-    print(f"\nwall time {result['wall_time_s']:.0f} s; results in {folder}/: records.csv, records.json, table.md, "
-          f"config.json" + (", search_time.png" if result["figure"] else ""))
+    phases = result["phase_times_s"]
+    print(f"\nwall time {sum(phases.values()):.0f} s (set-up {phases['setup']:.0f} s, clips {phases['drive']:.0f} s "
+          f"on {result['config'].workers} worker(s), files and recording {phases['outputs']:.0f} s); results in "
+          f"{folder}/: records.csv, records.json, table.md, config.json"
+          + (", search_time.png" if result["figure"] else ""))
     if result["rrd"] is not None:
         print(f"Rerun recording of every run: {result['rrd']}  (open it with: rerun {result['rrd']})")
     return result

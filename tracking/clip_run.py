@@ -60,7 +60,7 @@ from tracking.perception import perceived_scene
 from tracking.record import Contact, ExecutionRecord
 from tracking.stitching import StitchedPlan, stitch_distance
 from tracking.validators import validate_plan
-from tracking.world import build_world
+from tracking.world import World, build_world
 
 
 def clip_tracker_config() -> TrackerConfig:
@@ -162,6 +162,13 @@ def clip_world(clip: Clip) -> ClipWorld:
     movers = tuple(Mover(f"mover_{obj.id}", obj.outline, obj.poses, clip.frame_dt_s)
                    for obj in clip.objects if obj.moving)
     return ClipWorld(scene=scene, static_ids=tuple(obj.id for obj in static), movers=movers)
+
+
+def clip_mujoco_world(clip: Clip, tracker: TrackerConfig, ground: ClipWorld | None = None) -> World:
+    """The MuJoCo world of ``clip``'s ground truth (``ground``, default `clip_world`) with the vehicle of
+    ``tracker`` at rest at the clip's start."""
+    ground = clip_world(clip) if ground is None else ground
+    return build_world(ground.scene, np.asarray(clip.start, float), tracker, ground.movers)
 
 
 def object_of_geom(clip: Clip, world: ClipWorld, geom: str) -> str:
@@ -371,7 +378,7 @@ class ReplanningLoop:
 
 
 def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunConfig | None = None,
-             rerun_path: str | Path | None = None, render: bool = False) -> ClipRun:
+             rerun_path: str | Path | None = None, render: bool = False, world: World | None = None) -> ClipRun:
     """Drive ``clip`` in closed loop with ``planner`` replanning once per frame (module docstring).
 
     Parameters
@@ -390,13 +397,19 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
     rerun_path, render
         Write the run to this ``.rrd`` (`tracking.clip_log.ClipRerunObserver`), with off-screen frames if
         ``render``.
+    world
+        The clip's MuJoCo world from `clip_mujoco_world` with ``config.tracker``, to reuse across runs of the clip
+        (each run resets it to the start); default: built here.
     """
     config = ClipRunConfig() if config is None else config
     tracker = config.tracker
     loop = ReplanningLoop(clip, planner, config)
     ground = clip_world(clip)
     start = np.asarray(clip.start, float)
-    world = build_world(ground.scene, start, tracker, ground.movers)
+    world = clip_mujoco_world(clip, tracker, ground) if world is None else world
+    if world.config != tracker or world.scene.name != ground.scene.name:
+        raise ValueError(f"run_clip: the world passed was built for {world.scene.name} with another tracker "
+                         f"config, not for {ground.scene.name} with config.tracker")
     recorder = TrajectoryRecorder()
     parts: list[RunObserver] = [recorder]
     if rerun_path is not None:
