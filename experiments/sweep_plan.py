@@ -7,8 +7,10 @@ benchmarks merges its file over one shared recipe, ``checkpoints/configs/recipe.
 ``tab:app-ppo`` with the whole-lot reading of the geodesic curriculum, the file the shipped Factorial seeds were
 trained with as ``lot.json``). The adapted-HOPE row is trained by ``hope_policy.train`` from a file of
 `hope_policy.train.HopeTrainConfig` fields (its progress counted in episodes, its finished checkpoint ``final.pt``;
-`TRAINERS`). A configuration that cannot be trained today (BEV, the HOPE-style backbone) is in the plan with the
-reason, so it is listed as "not available yet" and never silently dropped.
+`TRAINERS`), and so are the three HOPE-style backbones of Table III (``topology_hope_{none,bev,vertices}.json``). A
+configuration that cannot be trained today is in the plan with the reason, so it is listed as "not available yet"
+and never silently dropped; so is one whose input file (`Configuration.requires`, e.g. a pretrained BEV
+autoencoder) does not exist yet, with the command that makes it.
 
 A run's **state** is read from its folder alone (`run_state`), never by loading a checkpoint:
 
@@ -22,7 +24,7 @@ A run's **state** is read from its folder alone (`run_state`), never by loading 
 - *not started*: none of the trainer's run files (`holds_run_files`);
 - *training now*: a ``np_policy.train`` process on this machine writes the folder (the sweep leaves it alone);
 - *config differs*: the folder's ``config.json`` is another configuration (the sweep refuses to touch it);
-- *not available yet*: the configuration cannot be trained today.
+- *not available yet*: the configuration cannot be trained today, or a file it requires does not exist yet.
 """
 
 from __future__ import annotations
@@ -51,9 +53,16 @@ HOPE_EPISODE_S = 0.19
 8.7 s of CPU time) and updates (47.4 and 52.3 s) of a run completed 316 and 310 episodes (compute estimates;
 measured as process CPU time with the machine's two cores shared by other jobs, when the wall clock ran about ten
 times longer)."""
+HOPE_BACKBONE_EPISODE_S = {"none": 0.62, "bev": 1.0, "vertices": 0.77}
+"""Seconds per training episode of the HOPE-style backbones of Table III on this machine (compute estimates): one
+collect of 8,192 transitions from 16 Topology-Stress envs took 5.6 / 27.1 / 7.6 s of CPU time (none / BEV, with
+the raster and the frozen encoder / vertices) and one of the update's ten epochs 5.2 / 6.7 / 6.5 s, i.e. 58 / 94 /
+73 s per update; the untrained policies' collects ended 62 / 84 / 135 episodes (full-range starts, most running
+to the 200-step budget), 94 on average, which gives these figures. The backbones have no RS takeover, so their
+episodes are longer than the adapted HOPE's (`HOPE_EPISODE_S`); measured as process CPU time on the shared machine."""
 TRAINERS = {"np_policy.train": ("epoch", "best.pt"), "hope_policy.train": ("episodes", "final.pt")}
 """The modules that train a configuration (``python -m``): the ``metrics.jsonl`` field that counts a run's progress
-and the file a finished run holds (its output, the checkpoint that is evaluated; `run_output`)."""
+and the file a finished run holds (its output, the checkpoint that is evaluated; `RunSpec.output`)."""
 TABLES = {
     "main": "Fig. 3, main comparison on the Factorial benchmark",
     "staged": "Table II, unified versus staged planning",
@@ -89,11 +98,15 @@ class Configuration:
     """Estimated seconds per epoch (per episode for the adapted HOPE) on this machine."""
     trainer: str = "np_policy.train"
     """The module that trains it, a key of `TRAINERS`."""
+    requires: tuple[tuple[str, str], ...] = ()
+    """(file relative to the repository root, the command that makes it) pairs: inputs the training reads."""
 
 
 _LOT = "{name}_seed{seed}_lot"
 """Run folders of the recipe's rows: the shipped Factorial seeds were named for the whole-lot curriculum."""
-_HOPE_STYLE = "the HOPE-style backbone is not built yet"
+_TOPOLOGY_AE = (("checkpoints/bev/topology_ae.pt",
+                  "python -m np_policy.bev_encoder --benchmark topology --out checkpoints/bev/topology_ae.pt "
+                  "--seed 0"),)
 _BEV = "the BEV representation (rendered image and pretrained autoencoder) is not built yet"
 PAPER_PLAN = (
     Configuration("factorial_np", "factorial", ("main", "staged", "connector", "curriculum"), "factorial_np.json",
@@ -107,9 +120,9 @@ PAPER_PLAN = (
     Configuration("topology_np_bev", "topology", ("representation",), missing=_BEV),
     Configuration("topology_np_vertices", "topology", ("representation",), "topology_np_vertices.json",
                   run_name=_LOT),
-    Configuration("topology_hopestyle_none", "topology", ("representation",), missing=_HOPE_STYLE),
-    Configuration("topology_hopestyle_bev", "topology", ("representation",), missing=f"{_HOPE_STYLE}; {_BEV}"),
-    Configuration("topology_hopestyle_vertices", "topology", ("representation",), missing=_HOPE_STYLE),
+    *(Configuration(f"topology_hope_{added}", "topology", ("representation",), f"topology_hope_{added}.json",
+                    recipe=False, epoch_s=HOPE_BACKBONE_EPISODE_S[added], trainer="hope_policy.train",
+                    requires=_TOPOLOGY_AE if added == "bev" else ()) for added in ("none", "bev", "vertices")),
     Configuration("site_np", "site", ("site",), "site_np.json", recipe=False, seeds=(0,), epoch_s=SITE_EPOCH_S),
 )
 """Every training run the paper's simulation tables need (``--plan paper``)."""
@@ -303,6 +316,9 @@ def run_state(run: RunSpec, active: dict[Path, int] | None = None) -> RunState:
     """The state of ``run``'s folder (see the module docstring)."""
     if run.overrides is None:
         return RunState("not available yet", detail=run.config.missing)
+    for path, command in run.config.requires:
+        if not (CONFIG_DIR.parent.parent / path).exists():
+            return RunState("not available yet", detail=f"it reads {path}, not made yet: {command}")
     epoch = metrics_epoch(run.run_dir / "metrics.jsonl", TRAINERS[run.config.trainer][0])
     pid = (active or {}).get(run.run_dir.resolve())
     if pid is not None:
@@ -368,6 +384,7 @@ def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
     unknown = sum(estimate_hours(r, s) is None for r, s in zip(runs, states))
     lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine (an estimate: {FACTORIAL_EPOCH_S} s "
                  f"per Factorial or Topology-Stress epoch, {SITE_EPOCH_S} s per site epoch, {HOPE_EPISODE_S} s per "
-                 "adapted-HOPE episode)"
+                 f"adapted-HOPE episode, {min(HOPE_BACKBONE_EPISODE_S.values())}–"
+                 f"{max(HOPE_BACKBONE_EPISODE_S.values())} s per HOPE-style backbone episode)"
                  + (f", not counting {unknown} run(s) not available yet" if unknown else ""))
     return "\n".join(lines)
