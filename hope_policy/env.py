@@ -60,7 +60,7 @@ from hope_policy.spaces import N_ANCHORS, TARGET_SIZE, action_space, action_to_a
 from hope_policy.takeover import MAX_CHUNKS
 from np_sim.bev import render_bev_batch
 from np_sim.config import EnvConfig
-from np_sim.env_core import BatchCore, checked_actions
+from np_sim.env_core import BatchCore, checked_actions, step_outcome
 from np_sim.errors import ConfigError
 from np_sim.frames import from_target_frame
 from np_sim.kernels import step as NK
@@ -315,10 +315,7 @@ class HopeVectorEnv(VectorEnv):
     def step(self, actions):
         core = self.core
         core.step(actions)
-        R = core.R
-        reward = R[:, K.R_REWARD].astype(np.float32)
-        terminated = R[:, K.R_TERMINATED] > 0
-        truncated = R[:, K.R_TRUNCATED] > 0
+        reward, terminated, truncated = step_outcome(core.R)
         info = core.step_info()
         done = terminated | truncated
         if done.any():

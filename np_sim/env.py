@@ -48,7 +48,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from np_sim.config import EnvConfig
-from np_sim.env_core import BatchCore
+from np_sim.env_core import BatchCore, step_outcome
 from np_sim.kernels import step as K
 from np_sim.observation import section_shapes, split_observation
 from np_sim.scene import Scene
@@ -145,10 +145,7 @@ class ParkingVectorEnv(VectorEnv):
     def step(self, actions):
         core = self.core
         core.step(actions)
-        R = core.R
-        reward = R[:, K.R_REWARD].astype(np.float32)
-        terminated = R[:, K.R_TERMINATED] > 0
-        truncated = R[:, K.R_TRUNCATED] > 0
+        reward, terminated, truncated = step_outcome(core.R)
         info = core.step_info()
         done = terminated | truncated
         if done.any():

@@ -76,6 +76,12 @@ def checked_actions(actions, num_envs: int) -> np.ndarray:
     return a
 
 
+def step_outcome(R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(reward as float32, terminated, truncated) of a batched step's result rows ``R``, whose first columns are
+    ``K.R_REWARD``, ``K.R_TERMINATED`` and ``K.R_TRUNCATED`` (the benchmark env's and the adapted HOPE's kernels)."""
+    return R[:, K.R_REWARD].astype(np.float32), R[:, K.R_TERMINATED] > 0, R[:, K.R_TRUNCATED] > 0
+
+
 class BatchCore:
     """State of ``num_envs`` episodes over a list of scenes, stepped by one compiled call."""
 

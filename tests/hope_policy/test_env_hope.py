@@ -225,3 +225,10 @@ def test_bad_input_is_one_clear_error():
     with pytest.raises(ConfigError, match="rs_spacing_m: expected a finite number > 0"):
         HopeEnvConfig(rs_spacing_m=0.0)
     assert HopeEnvConfig.from_dict(HopeEnvConfig.backbone("vertices").to_dict()) == HopeEnvConfig.backbone("vertices")
+
+
+def test_the_shared_step_outcome_reads_the_hope_kernels_result_columns():
+    from hope_policy import step as K
+    from np_sim.kernels import step as NK
+
+    assert (K.R_REWARD, K.R_TERMINATED, K.R_TRUNCATED) == (NK.R_REWARD, NK.R_TERMINATED, NK.R_TRUNCATED)
