@@ -83,10 +83,28 @@ class _Loop:
         self.length, self.reversals, self.direction = 0.0, 0, 0
         self.contacts: list[Contact] = []
         self.touching: set[str] = set()
+        self.plans_used, self.replans_failed = 1, 0
 
     def follow(self, segments: list[Segment], moving: bool) -> None:
         """Track ``segments`` from their start; without motion, align the steering first."""
         self.segments, self.k, self.hint, self.aligning, self.holding = segments, 0, 0, not moving, False
+
+    def adopt(self, new: Plan | None) -> bool:
+        """Follow the replanner's ``new`` plan if the tracker can (its first segment starts at the current speed
+        when its gear is the moving one); whether it was adopted. None is no request, not a failed replan."""
+        world, ec = self.world, self.config.executor
+        moving_gear = self.direction if abs(world.speed(world.pose()[2])) > ec.rest_speed_mps else 0
+        new_segments = _segments(new, self.config) if new is not None and new.success else []
+        if new_segments and not _check_plan(new, new_segments, self.config)[0]:
+            speed = abs(world.speed(world.pose()[2])) if new_segments[0].gear == moving_gear else 0.0
+            new_segments = _segments(new, self.config, speed)
+            self.follow(new_segments, moving=speed > 0)
+            self.plans_used += 1
+            self.observer.on_plan(self.t, new, new_segments)
+            return True
+        if new is not None:
+            self.replans_failed += 1
+        return False
 
     def hold(self) -> None:
         """Stand at the end of the finished plan (projected on its last segment) until `follow` is called."""
@@ -211,20 +229,12 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
     ExecutionRecord
         Bad plans and starts give a record with a failure reason; bad arguments raise `TrackingError`.
     """
-    if config is None:
-        config = TrackerConfig() if world is None else world.config
-    if world is not None and world.config != config:
-        raise TrackingError("execute: the world was built with another TrackerConfig than the one passed")
-    if not isinstance(plan, Plan):
-        raise TrackingError(f"execute: expected an np_sim.plan.Plan, got {type(plan).__name__}")
+    config = _resolved_config(plan, config, world)
     start = np.asarray(plan.start, dtype=float)
     if start.shape != (3,) or not np.all(np.isfinite(start)):
         raise TrackingError(f"execute: plan.start must be a finite [x, y, θ], got {plan.start!r}")
     segments = _segments(plan, config) if plan.success else []
-    reason, detail = _check_plan(plan, segments, config)
-    if not reason and not path_valid(scene, start[None], "footprint", config.vehicle):
-        reason, detail = "start_in_collision", (f"the vehicle footprint at the start {start.round(3).tolist()} "
-                                                f"overlaps an obstacle or leaves the boundary")
+    reason, detail = _refusal(scene, plan, start, segments, config)
     if reason:
         return ExecutionRecord(success=False, reason=reason, detail=detail, controller=controller, final_pose=start,
                                final_error=_pose_error(start, scene.target))
@@ -242,60 +252,87 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
         t_max = loop.t + ec.timeout_factor * sum(s.duration_s() for s in segments) + ec.timeout_margin_s
     else:
         t_max = ec.max_time_s
-    plans_used, replans_failed, next_replan = 1, 0, loop.t + ec.replan_period_s
-    stop, hold_until = "", math.inf
     wall0 = time.perf_counter()
+    stop = _drive(loop, scene.target, replan, t_max)
+    record = _record(loop, scene.target, controller, stop, t_max, time.perf_counter() - wall0,
+                     observers.frames_rendered)
+    observers.on_end(record)
+    return record
+
+
+def _resolved_config(plan: Plan, config: TrackerConfig | None, world: World | None) -> TrackerConfig:
+    """The run's tracker configuration (``config``, else the world's, else the default); `TrackingError` when
+    ``plan`` is no Plan or the world was built with another configuration."""
+    if config is None:
+        config = TrackerConfig() if world is None else world.config
+    if world is not None and world.config != config:
+        raise TrackingError("execute: the world was built with another TrackerConfig than the one passed")
+    if not isinstance(plan, Plan):
+        raise TrackingError(f"execute: expected an np_sim.plan.Plan, got {type(plan).__name__}")
+    return config
+
+
+def _refusal(scene: Scene, plan: Plan, start: np.ndarray, segments: list[Segment],
+             config: TrackerConfig) -> tuple[str, str]:
+    """('', '') when the run can start, else (reason, detail): an untrackable plan or a start in collision."""
+    reason, detail = _check_plan(plan, segments, config)
+    if not reason and not path_valid(scene, start[None], "footprint", config.vehicle):
+        reason, detail = "start_in_collision", (f"the vehicle footprint at the start {start.round(3).tolist()} "
+                                                f"overlaps an obstacle or leaves the boundary")
+    return reason, detail
+
+
+def _drive(loop: _Loop, target: np.ndarray, replan: Replanner | None, t_max: float) -> str:
+    """Step ``loop`` (calling ``replan`` every ``replan_period_s``) until the run ends; the stop reason: 'contact',
+    'timeout' or '' (plan finished, or no new plan while standing short of the target: judged by `_record`)."""
+    world, ec = loop.world, loop.config.executor
+    next_replan, hold_until = loop.t + ec.replan_period_s, math.inf
     while True:
         if replan is not None and loop.t >= next_replan - 1e-9:
             next_replan += ec.replan_period_s
-            new = replan(world.pose(), loop.t)
-            moving_gear = loop.direction if abs(world.speed(world.pose()[2])) > ec.rest_speed_mps else 0
-            new_segments = _segments(new, config) if new is not None and new.success else []
-            if new_segments and not _check_plan(new, new_segments, config)[0]:
-                speed = abs(world.speed(world.pose()[2])) if new_segments[0].gear == moving_gear else 0.0
-                new_segments = _segments(new, config, speed)
-                loop.follow(new_segments, moving=speed > 0)
+            if loop.adopt(replan(world.pose(), loop.t)):
                 hold_until = math.inf
-                plans_used += 1
-                observers.on_plan(loop.t, new, new_segments)
-            elif new is not None:  # None: the replanner saw no need for a new plan
-                replans_failed += 1
         if not loop.step():
-            if replan is None or parked(world.pose(), scene.target, ec):
-                break
+            if replan is None or parked(world.pose(), target, ec):
+                return ""
             loop.hold()
             hold_until = loop.t + ec.hold_max_s
         if loop.t >= hold_until:
-            break  # no new plan while standing short of the target: judged below (not_parked)
+            return ""
         if loop.contacts and ec.stop_on_contact:
-            stop = "contact"
-            break
+            return "contact"
         if loop.t >= t_max:
-            stop = "timeout"
-            break
-    wall = time.perf_counter() - wall0
-    final = world.pose()
-    err = _pose_error(final, scene.target)
+            return "timeout"
+
+
+def _record(loop: _Loop, target: np.ndarray, controller: str, stop: str, t_max: float, wall_s: float,
+            frames_rendered: int) -> ExecutionRecord:
+    """The record of a finished run: the stop reason, else a contact, else 'not_parked' outside the tolerance."""
+    ec = loop.config.executor
+    final = loop.world.pose()
+    err = _pose_error(final, target)
     if stop:
         reason = stop
     elif loop.contacts:
         reason = "contact"
-    elif not _within_tolerance(err, ec):
-        reason = "not_parked"
-    detail = {"contact": f"chassis touched {loop.contacts[0].geom} at t = {loop.contacts[0].time_s:.2f} s"
-              if loop.contacts else "",
-              "timeout": f"not finished after {t_max:.1f} s of sim time",
-              "not_parked": f"stopped {err[0]:.3f} m / {math.degrees(err[1]):.1f}° from the target "
-                            f"(tolerance {ec.goal_position_tol_m} m / {ec.goal_heading_tol_deg}°)"}.get(reason, "")
+    else:
+        reason = "" if _within_tolerance(err, ec) else "not_parked"
+    if reason == "contact":
+        detail = f"chassis touched {loop.contacts[0].geom} at t = {loop.contacts[0].time_s:.2f} s"
+    elif reason == "timeout":
+        detail = f"not finished after {t_max:.1f} s of sim time"
+    elif reason == "not_parked":
+        detail = (f"stopped {err[0]:.3f} m / {math.degrees(err[1]):.1f}° from the target "
+                  f"(tolerance {ec.goal_position_tol_m} m / {ec.goal_heading_tol_deg}°)")
+    else:
+        detail = ""
     n = max(loop.n_err, 1)
-    record = ExecutionRecord(
+    return ExecutionRecord(
         success=not reason, reason=reason, detail=detail, controller=controller, contacts=loop.contacts,
         final_pose=final, final_error=err, cross_track_rms_m=math.sqrt(loop.lateral_sq / n),
         cross_track_max_m=loop.lateral_max, heading_error_rms_rad=math.sqrt(loop.heading_sq / n),
-        path_length_m=loop.length, reversals=loop.reversals, sim_time_s=loop.t, wall_time_s=wall,
-        plans_used=plans_used, replans_failed=replans_failed, frames_rendered=observers.frames_rendered)
-    observers.on_end(record)
-    return record
+        path_length_m=loop.length, reversals=loop.reversals, sim_time_s=loop.t, wall_time_s=wall_s,
+        plans_used=loop.plans_used, replans_failed=loop.replans_failed, frames_rendered=frames_rendered)
 
 
 def parked(pose: np.ndarray, target: np.ndarray, ec: ExecutorConfig) -> bool:
