@@ -5,9 +5,9 @@ environment it was trained in (``HopeParkingEnv`` with the checkpoint's ``HopeEn
 the network's inputs as in training (`hope_policy.inputs`: a BEV raster encoded by the frozen autoencoder the
 config names) and normalised with the statistics stored in the checkpoint, the policy's mean action, or with the
 action mask the most probable masked anchor (`hope_policy.action_mask.apply_mask` without a generator), the
-Reeds–Shepp takeover and the fixed Hermite terminator in the loop exactly as in training, until success, a hard failure or the step budget. A success
-is claimed only when the plan passes the rule it is scored by (`np_sim.validate.validation_failure`); otherwise it
-becomes a failure 'validation: …'.
+Reeds–Shepp takeover and the fixed Hermite terminator in the loop exactly as in training, until success, a hard
+failure or the step budget. A success is claimed only when the plan passes the rule it is scored by
+(`np_sim.validate.validation_failure`); otherwise it becomes a failure 'validation: …'.
 """
 
 from __future__ import annotations

@@ -22,44 +22,13 @@ from numba import njit
 
 from np_sim.kernels.collision import arc_valid
 from np_sim.kernels.kinematics import arc_point
-from np_sim.kernels.reeds_shepp import (_BASE_LETTERS, _HAS_BACKWARDS, _N_PIECES, MAX_PIECES, N_BASES, _base_word,
-                                        relative_goal)
+from np_sim.kernels.reeds_shepp import MAX_PIECES, all_words, relative_goal
 from np_sim.reeds_shepp import MIN_PIECE_M
 
 MAX_WORDS = 48
 MAX_CHUNKS = 128
 """Capacity of the takeover queue; a candidate needing more chunks (longer than 128 full-speed actions) is
 rejected like an invalid one."""
-
-
-@njit(cache=True, error_model="numpy")
-def all_words(x: float, y: float, phi: float, letters: np.ndarray, lengths: np.ndarray, counts: np.ndarray) -> int:
-    """Every Reeds–Shepp word that reaches the normalised goal (x, y, φ) (Reeds & Shepp 1990, formulas 8.1–8.11
-    under timeflip, reflect and backwards): letters (48, 5), signed normalised lengths (48, 5) and piece counts (48,)
-    filled in generation order; returns the number of words."""
-    buf = np.empty(MAX_PIECES)
-    cphi, sphi = math.cos(phi), math.sin(phi)
-    xb, yb = x * cphi + y * sphi, x * sphi - y * cphi
-    w = 0
-    for k in range(N_BASES):
-        n = _N_PIECES[k]
-        for backwards in range(2 if _HAS_BACKWARDS[k] else 1):
-            bx, by = (xb, yb) if backwards else (x, y)
-            for sym in range(4):
-                timeflip, reflect = sym & 1, sym >> 1
-                qx = -bx if timeflip else bx
-                qy = -by if reflect else by
-                qphi = -phi if timeflip != reflect else phi
-                if not _base_word(k, qx, qy, qphi, buf):
-                    continue
-                for i in range(n):
-                    j = n - 1 - i if backwards else i
-                    letter = _BASE_LETTERS[k, j]
-                    letters[w, i] = -letter if reflect else letter
-                    lengths[w, i] = -buf[j] if timeflip else buf[j]
-                counts[w] = n
-                w += 1
-    return w
 
 
 @njit(cache=True, error_model="numpy")

@@ -351,17 +351,14 @@ def train(config: HopeTrainConfig, out: str | Path, resume: bool = False, overwr
 def finished_rows(out: Path, config: HopeTrainConfig) -> list[dict[str, Any]] | None:
     """The metrics rows of the finished run in ``out`` (its last row has counted ``config.episodes`` and
     ``final.pt`` exists, read from the files alone), or None when it is not finished. A run trained under another
-    config is a CheckpointError naming its ``config.json`` and every differing field."""
+    config is a CheckpointError naming its ``config.json`` and every differing field (a field added since is
+    compared with its default)."""
     rows = read_metrics(out / "metrics.jsonl", key="update")
-    if not rows or rows[-1]["episodes"] < config.episodes or not (out / "final.pt").exists():
-        return None
-    path = out / "config.json"
-    try:
-        stored = HopeTrainConfig.from_dict(json.loads(path.read_text(encoding="utf-8"))).to_dict()
-    except (OSError, ValueError) as exc:  # ValueError covers bad JSON and ConfigError
-        raise ConfigError(f"{path}: not a readable HopeTrainConfig of the finished run ({exc})") from exc
-    check_config(path, config.to_dict(), stored)
-    return rows
+    if rows and rows[-1]["episodes"] >= config.episodes and (out / "final.pt").exists():
+        stored = HopeTrainConfig.from_dict(read_config_file(out / "config.json"))
+        check_config(out / "config.json", config.to_dict(), stored.to_dict())
+        return rows
+    return None
 
 
 def read_config_file(path: Path | None) -> dict[str, Any]:

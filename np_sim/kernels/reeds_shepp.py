@@ -205,8 +205,52 @@ def _base_word(k: int, x: float, y: float, phi: float, out: np.ndarray) -> bool:
 
 
 @njit(cache=True, error_model="numpy")
+def _solve_symmetric(k: int, backwards: int, sym: int, x: float, y: float, xb: float, yb: float, phi: float,
+                     buf: np.ndarray) -> bool:
+    """Solve base word k for the normalised goal (x, y, φ) under one symmetry (``backwards``, with (xb, yb) the
+    backwards image of (x, y); timeflip = ``sym & 1``, reflect = ``sym >> 1``): base lengths into ``buf``."""
+    bx, by = (xb, yb) if backwards else (x, y)
+    timeflip, reflect = sym & 1, sym >> 1
+    qx = -bx if timeflip else bx
+    qy = -by if reflect else by
+    return _base_word(k, qx, qy, -phi if timeflip != reflect else phi, buf)
+
+
+@njit(cache=True, error_model="numpy")
+def _write_word(k: int, backwards: int, sym: int, buf: np.ndarray, letters: np.ndarray, lengths: np.ndarray) -> int:
+    """The word `_solve_symmetric` solved into ``buf``, as letters and signed lengths (5,); returns its piece count."""
+    n = _N_PIECES[k]
+    timeflip, reflect = sym & 1, sym >> 1
+    for i in range(n):
+        j = n - 1 - i if backwards else i
+        letter = _BASE_LETTERS[k, j]
+        letters[i] = -letter if reflect else letter
+        lengths[i] = -buf[j] if timeflip else buf[j]
+    return n
+
+
+@njit(cache=True, error_model="numpy")
+def all_words(x: float, y: float, phi: float, letters: np.ndarray, lengths: np.ndarray, counts: np.ndarray) -> int:
+    """Every Reeds–Shepp word that reaches the normalised goal (x, y, φ) (formulas 8.1–8.11 under timeflip, reflect
+    and backwards): letters (48, 5), signed normalised lengths (48, 5) and piece counts (48,) filled in generation
+    order; returns the number of words."""
+    buf = np.empty(MAX_PIECES)
+    cphi, sphi = math.cos(phi), math.sin(phi)
+    xb, yb = x * cphi + y * sphi, x * sphi - y * cphi
+    w = 0
+    for k in range(N_BASES):
+        for backwards in range(2 if _HAS_BACKWARDS[k] else 1):
+            for sym in range(4):
+                if _solve_symmetric(k, backwards, sym, x, y, xb, yb, phi, buf):
+                    counts[w] = _write_word(k, backwards, sym, buf, letters[w], lengths[w])
+                    w += 1
+    return w
+
+
+@njit(cache=True, error_model="numpy")
 def shortest_word(x: float, y: float, phi: float, letters: np.ndarray, lengths: np.ndarray) -> int:
-    """Shortest Reeds–Shepp word to the normalised goal (x, y, φ) over all 48 words.
+    """Shortest Reeds–Shepp word to the normalised goal (x, y, φ) over all 48 words (the first of equal length in
+    `all_words`' order).
 
     Fills ``letters`` (5,) int64 and ``lengths`` (5,) float (signed, normalised) and returns the piece count.
     """
@@ -216,28 +260,16 @@ def shortest_word(x: float, y: float, phi: float, letters: np.ndarray, lengths: 
     cphi, sphi = math.cos(phi), math.sin(phi)
     xb, yb = x * cphi + y * sphi, x * sphi - y * cphi
     for k in range(N_BASES):
-        n = _N_PIECES[k]
         for backwards in range(2 if _HAS_BACKWARDS[k] else 1):
-            bx, by = (xb, yb) if backwards else (x, y)
             for sym in range(4):
-                timeflip, reflect = sym & 1, sym >> 1
-                qx = -bx if timeflip else bx
-                qy = -by if reflect else by
-                qphi = -phi if timeflip != reflect else phi
-                if not _base_word(k, qx, qy, qphi, buf):
+                if not _solve_symmetric(k, backwards, sym, x, y, xb, yb, phi, buf):
                     continue
                 total = 0.0
-                for i in range(n):
+                for i in range(_N_PIECES[k]):
                     total += abs(buf[i])
-                if total >= best:
-                    continue
-                best = total
-                n_best = n
-                for i in range(n):
-                    j = n - 1 - i if backwards else i
-                    letter = _BASE_LETTERS[k, j]
-                    letters[i] = -letter if reflect else letter
-                    lengths[i] = -buf[j] if timeflip else buf[j]
+                if total < best:
+                    best = total
+                    n_best = _write_word(k, backwards, sym, buf, letters, lengths)
     return n_best
 
 

@@ -32,14 +32,6 @@ from np_sim.starts import UniformStartSampler
 CONFIGS = Path(__file__).resolve().parents[2] / "checkpoints" / "configs"
 
 
-@pytest.fixture(autouse=True, scope="module")
-def one_torch_thread():
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
-
-
 @pytest.fixture(scope="module")
 def autoencoder(tmp_path_factory) -> Path:
     """An untrained autoencoder file in the pretraining's format (the wiring needs its shapes, not its training)."""

@@ -7,7 +7,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pytest
 import torch
 import torch.nn.functional as F
 
@@ -15,15 +14,6 @@ from hope_policy.network import AttentionBlock, HopeActorCritic, Modalities
 
 FULL = Modalities((("lidar", 120), ("target", 5), ("action_mask", 42)))
 NO_MASK = Modalities((("lidar", 120), ("target", 5)))
-
-
-@pytest.fixture(autouse=True, scope="module")
-def one_torch_thread():
-    """Small networks: one thread is fastest, and avoids OpenMP spinning when the machine's cores are busy."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
 
 
 def linear(n_in, n_out, bias=True):

@@ -16,15 +16,6 @@ from np_sim.errors import ConfigError
 SMALL = Modalities((("lidar", 4), ("target", 5)))
 
 
-@pytest.fixture(autouse=True, scope="module")
-def one_torch_thread():
-    """Small networks: one thread is fastest, and avoids OpenMP spinning when the machine's cores are busy."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(before)
-
-
 def brute_force_advantages(rewards, values, next_values, terminated, truncated, gamma, lam):
     """A_t = Σ_k (γλ)^k δ_{t+k}, summed explicitly until the episode or the batch ends."""
     T, N = rewards.shape
