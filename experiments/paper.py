@@ -67,7 +67,7 @@ ARMS = {
     TWOSTAGE.label: (Arm("Unified NP", "factorial_np"), Arm("Hybrid A* → NP", "factorial_np", "staged"),
                      Arm("Hybrid A* → HOPE", "factorial_hope", "staged")),
     TOPOLOGY_STRESS.label: tuple(Arm(f"{name} backbone: {rep}", f"topology_{stem}_{key}")
-                                 for name, stem in (("NeuralParker", "np"), ("HOPE-style", "hopestyle"))
+                                 for name, stem in (("NeuralParker", "np"), ("HOPE-style", "hope"))
                                  for rep, key in (("none", "none"), ("BEV", "bev"), ("vertices", "vertices"))),
     HERMITE.label: (Arm("Fixed Hermite", "factorial_np_fixed"),
                     Arm("Ensemble, eval. only", "factorial_np_fixed", "ensemble"),

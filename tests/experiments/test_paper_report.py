@@ -137,8 +137,8 @@ def test_measure_counts_only_finished_evaluated_seeds(tmp_path):
     assert "has 2 episodes, expected 1080" in wrong_size.missing[0]
     hope = measure(Arm("Adapted HOPE", "factorial_hope"), runs, 1080, False, {})
     assert hope.seeds_text() == "0 of 3 seeds: not trained yet (not started)"
-    backbone = measure(Arm("HOPE-style, none", "topology_hopestyle_none"), runs, 720, False, {})
-    assert backbone.seeds_text() == "0 of 3 seeds: not available yet (the HOPE-style backbone is not built yet)"
+    backbone = measure(Arm("HOPE-style, none", "topology_hope_none"), runs, 720, False, {})
+    assert backbone.seeds_text() == "0 of 3 seeds: not trained yet (not started)"
 
 
 def test_a_finished_adapted_hope_run_is_read_from_final_pt_and_its_planner_records(tmp_path):
