@@ -17,7 +17,7 @@ import rerun as rr
 
 from np_sim.scene import Scene
 from tracking.config import TrackerConfig
-from tracking.rerun_log import RerunObserver
+from tracking.rerun_log import RerunObserver, log_outcome
 
 
 def _closed(ring: np.ndarray) -> np.ndarray:
@@ -53,7 +53,7 @@ class ClipRerunObserver(RerunObserver):
 
     def finish_unrun(self, record) -> None:
         """Close the file of a run the executor refused before its loop (a failed first plan): the outcome only."""
-        self.rec.log("run/outcome", rr.TextLog(f"success=False reason={record.reason} {record.detail}"), static=True)
+        log_outcome(self.rec, record)
         if self.renderer is not None:
             self.renderer.on_end(record)
         self.rec.flush()

@@ -12,7 +12,7 @@ Entity paths:
 * ``controller/<name>`` (scalars on ``sim_time``): cross_track_m, heading_error_rad, steer_curvature_cmd,
   steer_curvature_ref, speed_mps, speed_target_mps;
 * ``camera/topdown``, ``camera/chase`` (JPEG frames on ``sim_time``) when rendering;
-* ``run/outcome`` (text): success, reason and the tracking figures.
+* ``run/outcome`` (text log at the run's end time): success, reason and the tracking figures.
 
 Every recording is named after its file (``<clip>_<planner>`` in a clip run) and carries the viewer layout
 `run_blueprint`; `merge_recordings` merges the recordings of several runs into one optimised file.
@@ -38,6 +38,13 @@ from tracking.observer import RunObserver
 _GEAR_COLORS = {1: (40, 170, 60), -1: (210, 50, 50)}
 """Planned path colour per gear (forward green, reverse red)."""
 
+_PLAN_RADIUS_M = 0.12
+"""Half-width of the drawn plan (m): wide enough to show its gear colour on both sides of the executed path."""
+
+_PLAN_DRAW_ORDER, _EXECUTED_DRAW_ORDER = 15.0, 25.0
+"""Rerun draw orders (higher on top; by default line strips draw at 20, points at 30): the plan under the other
+outlines, the executed path over them and under the points."""
+
 _SCALARS = ("cross_track_m", "heading_error_rad", "steer_curvature_cmd", "steer_curvature_ref", "speed_mps",
             "speed_target_mps")
 """Controller scalars, logged under ``controller/``."""
@@ -57,7 +64,8 @@ def _closed(ring: np.ndarray) -> np.ndarray:
 def run_blueprint() -> rrb.Blueprint:
     """The viewer layout of a run: the 2-D world (scene, movers, detections, plans, footprint, executed path,
     contacts) on the left; on the right the two cameras side by side, the controller scalars in one time-series
-    panel and the outcome text."""
+    panel and the outcome text. The selection panel and the time panel start collapsed (the time panel keeps its
+    playback bar), leaving the room to the views."""
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Spatial2DView(name="World", origin=WORLD_ORIGIN),
@@ -68,7 +76,17 @@ def run_blueprint() -> rrb.Blueprint:
                 rrb.TextLogView(name="Outcome", origin="run"),
                 row_shares=[3, 3, 1]),
             column_shares=[3, 2]),
+        rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed"),
         auto_views=False)
+
+
+def log_outcome(rec: rr.RecordingStream, record, figures: str = "") -> None:
+    """Log a run's outcome line (success, reason, detail, then ``figures``) to ``run/outcome`` at the run's end
+    time, on the timeline: the viewer's text-log view lists no static rows."""
+    rec.set_time("sim_time", duration=record.sim_time_s)
+    rec.log("run/outcome", rr.TextLog(f"success={record.success} reason={record.reason or '-'} {record.detail} "
+                                      f"{figures}".rstrip(), level="INFO" if record.success else "WARN"))
 
 
 def merge_recordings(files: list[Path], out: Path) -> Path:
@@ -130,8 +148,9 @@ class RerunObserver(RunObserver):
 
     def _log_plan(self, t: float, segments) -> None:
         self.rec.set_time("sim_time", duration=t)
-        self.rec.log("world/plan", rr.LineStrips2D([seg.xy for seg in segments],
-                                                   colors=[_GEAR_COLORS[seg.gear] for seg in segments], radii=0.04))
+        self.rec.log("world/plan", rr.LineStrips2D([seg.xy for seg in segments], radii=_PLAN_RADIUS_M,
+                                                   colors=[_GEAR_COLORS[seg.gear] for seg in segments],
+                                                   draw_order=_PLAN_DRAW_ORDER))
 
     def on_start(self, world, plan, segments) -> None:
         scene, rec = world.scene, self.rec
@@ -177,15 +196,13 @@ class RerunObserver(RunObserver):
             for j, name in enumerate(_SCALARS):
                 rec.send_columns(f"controller/{name}", indexes=index, columns=rr.Scalars.columns(scalars=values[:, j]))
         if self.trajectory:
-            rec.log("world/executed", rr.LineStrips2D([np.asarray(self.trajectory)], colors=[(20, 20, 20)]),
-                    static=True)
+            rec.log("world/executed", rr.LineStrips2D([np.asarray(self.trajectory)], colors=[(20, 20, 20)],
+                                                      draw_order=_EXECUTED_DRAW_ORDER), static=True)
         for c in record.contacts:
             rec.set_time("sim_time", duration=c.time_s)
             rec.log("world/contacts", rr.Points2D([c.position], labels=[c.geom], colors=[(255, 0, 0)], radii=0.15))
-        rec.log("run/outcome", rr.TextLog(
-            f"success={record.success} reason={record.reason or '-'} {record.detail} "
-            f"cross_track_rms_m={record.cross_track_rms_m:.3f} final_error=({record.final_error[0]:.3f} m, "
-            f"{np.degrees(record.final_error[1]):.1f} deg)"), static=True)
+        log_outcome(rec, record, f"cross_track_rms_m={record.cross_track_rms_m:.3f} final_error="
+                                 f"({record.final_error[0]:.3f} m, {np.degrees(record.final_error[1]):.1f} deg)")
         if self.renderer is not None:
             self.renderer.on_end(record)
         rec.flush()

@@ -121,6 +121,7 @@ def test_a_clip_recording_opens_on_the_world_the_cameras_the_scalars_and_the_out
         (static if chunk.is_static else temporal).update(
             (chunk.entity_path, name) for name in chunk.to_record_batch().schema.names if ":" in name)
     assert not static & temporal  # static data would hide every value logged on the timeline (the replans)
+    assert "/run/outcome" not in {entity for entity, _ in static}  # the text-log view lists no static rows
     assert sum(c.num_rows for c in store if c.entity_path == "/world/plan") >= 2  # the first plan and replans
     names = [c.to_record_batch().column("RecordingInfo:name").to_pylist() for c in store
              if "RecordingInfo:name" in c.to_record_batch().schema.names]
