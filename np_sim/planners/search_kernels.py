@@ -126,6 +126,107 @@ def rs_shot(geo, x: float, y: float, th: float, gx: float, gy: float, gth: float
 
 
 @njit(cache=True, error_model="numpy")
+def goal_reached(x: float, y: float, th: float, goal: np.ndarray, tol_m: float, tol_rad: float,
+                 region_m: float) -> bool:
+    """The pose (x, y, θ) meets the goal: within ``region_m`` of the goal point for a region goal (``region_m`` > 0),
+    otherwise within ``tol_m`` of the goal point and ``tol_rad`` of its heading."""
+    dist = math.hypot(x - goal[0], y - goal[1])
+    if region_m > 0.0:
+        return dist <= region_m
+    return dist <= tol_m and abs(wrap_angle(th - goal[2])) <= tol_rad
+
+
+@njit(cache=True, error_model="numpy")
+def analytic_due(x: float, y: float, th: float, goal: np.ndarray, kappa_max: float, expanded: int,
+                 analytic_every: int, analytic_near_m: float) -> bool:
+    """An analytic Reeds–Shepp shot is tried on every ``analytic_every``-th expansion (the 1st, the
+    (analytic_every + 1)th, …) and whenever the Reeds–Shepp length to the goal is at most ``analytic_near_m``."""
+    return (expanded % analytic_every == 1
+            or rs_length(x, y, th, goal[0], goal[1], goal[2], kappa_max) <= analytic_near_m)
+
+
+@njit(cache=True, error_model="numpy")
+def successor_g(g_parent: float, parent_kappa: float, parent_len: float, kappa: float, length: float,
+                costs: np.ndarray, kappa_max: float) -> float:
+    """g after the arc (κ, l) from a node of cost ``g_parent`` reached by the arc (κ_parent, l_parent): plus
+    |l|·(1, or the reverse factor when l < 0) + c_steer·|κ|/κ_max, and, unless the node is the start (l_parent = 0),
+    the gear-switch cost when l changes sign and c_Δκ·|κ − κ_parent|/κ_max (``costs`` as in ``expand``)."""
+    g = g_parent + abs(length) * (costs[0] if length < 0.0 else 1.0)
+    g += costs[2] * abs(kappa) / kappa_max
+    if parent_len != 0.0:
+        if parent_len * length < 0.0:
+            g += costs[1]
+        g += costs[3] * abs(kappa - parent_kappa) / kappa_max
+    return g
+
+
+@njit(cache=True, error_model="numpy")
+def node_priority(g: float, h: float, h_weight: float, x: float, y: float, use_guide: bool, guide: np.ndarray,
+                  guide_weight: float, guide_cap_m: float) -> float:
+    """f = g + w_h·h + w_g·min(d_guide, cap), the guide term only with ``use_guide`` (NP-Guided A*, paper §IV-B)."""
+    f = g + h_weight * h
+    if use_guide:
+        f += guide_weight * min(polyline_distance(x, y, guide), guide_cap_m)
+    return f
+
+
+@njit(cache=True, error_model="numpy")
+def store_node(k: int, x: float, y: float, th: float, g: float, parent: int, kappa: float, length: float, cell: int,
+               stamp: int, node_pose: np.ndarray, node_g: np.ndarray, node_parent: np.ndarray, node_arc: np.ndarray,
+               node_cell: np.ndarray, cell_stamp: np.ndarray, cell_g: np.ndarray) -> None:
+    """Write node ``k`` (pose, g, parent, arc from the parent, lattice cell) and make it its cell's best open node."""
+    node_pose[k, 0], node_pose[k, 1], node_pose[k, 2] = x, y, th
+    node_g[k] = g
+    node_parent[k] = parent
+    node_arc[k, 0], node_arc[k, 1] = kappa, length
+    node_cell[k] = cell
+    cell_stamp[cell] = stamp
+    cell_g[cell] = g
+
+
+@njit(cache=True, error_model="numpy")
+def push_successors(i: int, geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.ndarray,
+                    costs: np.ndarray, kappa_max: float, n_samples: int, region_m: float,
+                    lattice: np.ndarray, n_lattice: np.ndarray,
+                    hgrid: np.ndarray, h_origin: np.ndarray, h_cell_m: float,
+                    use_guide: bool, guide: np.ndarray, guide_weight: float, guide_cap_m: float,
+                    node_pose: np.ndarray, node_g: np.ndarray, node_parent: np.ndarray, node_arc: np.ndarray,
+                    node_cell: np.ndarray, cell_stamp: np.ndarray, cell_g: np.ndarray, closed_stamp: np.ndarray,
+                    heap_keys: np.ndarray, heap_ids: np.ndarray, state: np.ndarray,
+                    corners: np.ndarray, hit: np.ndarray) -> bool:
+    """Open the successor of node ``i`` along each primitive whose end lies in an unclosed lattice cell, improves
+    that cell's best g, passes ``arc_scored`` and has a finite h; False when the node arrays are full."""
+    x, y, th = node_pose[i, 0], node_pose[i, 1], node_pose[i, 2]
+    parent_kappa, parent_len = node_arc[i, 0], node_arc[i, 1]
+    stamp = state[S_STAMP]
+    for p in range(prims.shape[0]):
+        kappa, length = prims[p, 0], prims[p, 1]
+        nx_, ny_, nth_ = arc_point(x, y, th, kappa, length)
+        c = lattice_cell(nx_, ny_, nth_, lattice[0], lattice[1], lattice[2], n_lattice[0], n_lattice[1],
+                         n_lattice[2])
+        if c < 0 or closed_stamp[c] == stamp:
+            continue
+        g = successor_g(node_g[i], parent_kappa, parent_len, kappa, length, costs, kappa_max)
+        if cell_stamp[c] == stamp and cell_g[c] <= g:
+            continue
+        if not arc_scored(geo, x, y, th, kappa, length, n_samples, footprint, local, corners, hit):
+            continue
+        h = heuristic(nx_, ny_, nth_, goal[0], goal[1], goal[2], kappa_max, region_m, hgrid, h_origin[0],
+                      h_origin[1], h_cell_m)
+        if not math.isfinite(h):
+            continue
+        k = state[S_N_NODES]
+        if k >= node_g.shape[0]:
+            return False
+        state[S_N_NODES] = k + 1
+        store_node(k, nx_, ny_, nth_, g, i, kappa, length, c, stamp, node_pose, node_g, node_parent, node_arc,
+                   node_cell, cell_stamp, cell_g)
+        f = node_priority(g, h, costs[4], nx_, ny_, use_guide, guide, guide_weight, guide_cap_m)
+        state[S_HEAP_SIZE] = heap_push(heap_keys, heap_ids, state[S_HEAP_SIZE], f, k)
+    return True
+
+
+@njit(cache=True, error_model="numpy")
 def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.ndarray, costs: np.ndarray,
            kappa_max: float, n_samples: int, tol_m: float, tol_rad: float, region_m: float,
            lattice: np.ndarray, n_lattice: np.ndarray,
@@ -142,16 +243,11 @@ def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.
     ``lattice`` = (origin x, origin y, resolution m); ``n_lattice`` = (nx, ny, n_headings); ``n_samples``: the
     reference points per arc of the paper's rule (``arc_scored``).
     """
-    gx, gy, gth = goal[0], goal[1], goal[2]
-    reverse_factor, switch_cost, steer_cost, steer_change_cost, h_weight = (costs[0], costs[1], costs[2], costs[3],
-                                                                            costs[4])
-    ox, oy, res = lattice[0], lattice[1], lattice[2]
-    nx, ny, nth = n_lattice[0], n_lattice[1], n_lattice[2]
     stamp = state[S_STAMP]
     corners = np.empty((4, 2))
     hit = np.empty(4)
-    capacity = node_g.shape[0]
     use_guide = guide_weight > 0.0 and guide.shape[0] > 0
+    region_goal = region_m > 0.0
     while state[S_HEAP_SIZE] > 0:
         if state[S_EXPANDED] >= max_expanded:
             return CHUNK_DONE, -1
@@ -163,55 +259,18 @@ def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.
         closed_stamp[cell] = stamp
         state[S_EXPANDED] += 1
         x, y, th = node_pose[i, 0], node_pose[i, 1], node_pose[i, 2]
-        dist = math.hypot(x - gx, y - gy)
-        if region_m > 0.0:
-            if dist <= region_m:
-                return FOUND, i
-        else:
-            if dist <= tol_m and abs(wrap_angle(th - gth)) <= tol_rad:
-                return FOUND, i
-            if (state[S_EXPANDED] % analytic_every == 1
-                    or rs_length(x, y, th, gx, gy, gth, kappa_max) <= analytic_near_m):
-                n_rs = rs_shot(geo, x, y, th, gx, gy, gth, kappa_max, n_samples, footprint, local, corners, hit,
-                               rs_out)
-                if n_rs >= 0:
-                    state[S_N_RS] = n_rs
-                    return FOUND_ANALYTIC, i
-        parent_len = node_arc[i, 1]
-        parent_kappa = node_arc[i, 0]
-        for p in range(prims.shape[0]):
-            kappa, length = prims[p, 0], prims[p, 1]
-            nx_, ny_, nth_ = arc_point(x, y, th, kappa, length)
-            c = lattice_cell(nx_, ny_, nth_, ox, oy, res, nx, ny, nth)
-            if c < 0 or closed_stamp[c] == stamp:
-                continue
-            g = node_g[i] + abs(length) * (reverse_factor if length < 0.0 else 1.0)
-            g += steer_cost * abs(kappa) / kappa_max
-            if parent_len != 0.0:
-                if parent_len * length < 0.0:
-                    g += switch_cost
-                g += steer_change_cost * abs(kappa - parent_kappa) / kappa_max
-            if cell_stamp[c] == stamp and cell_g[c] <= g:
-                continue
-            if not arc_scored(geo, x, y, th, kappa, length, n_samples, footprint, local, corners, hit):
-                continue
-            h = heuristic(nx_, ny_, nth_, gx, gy, gth, kappa_max, region_m, hgrid, h_origin[0], h_origin[1], h_cell_m)
-            if not math.isfinite(h):
-                continue
-            k = state[S_N_NODES]
-            if k >= capacity:
-                return NODES_FULL, -1
-            state[S_N_NODES] = k + 1
-            node_pose[k, 0], node_pose[k, 1], node_pose[k, 2] = nx_, ny_, nth_
-            node_g[k] = g
-            node_parent[k] = i
-            node_arc[k, 0], node_arc[k, 1] = kappa, length
-            node_cell[k] = c
-            cell_stamp[c] = stamp
-            cell_g[c] = g
-            f = g + h_weight * h
-            if use_guide:
-                f += guide_weight * min(polyline_distance(nx_, ny_, guide), guide_cap_m)
-            state[S_HEAP_SIZE] = heap_push(heap_keys, heap_ids, state[S_HEAP_SIZE], f, k)
+        if goal_reached(x, y, th, goal, tol_m, tol_rad, region_m):
+            return FOUND, i
+        if not region_goal and analytic_due(x, y, th, goal, kappa_max, state[S_EXPANDED], analytic_every,
+                                            analytic_near_m):
+            n_rs = rs_shot(geo, x, y, th, goal[0], goal[1], goal[2], kappa_max, n_samples, footprint, local,
+                           corners, hit, rs_out)
+            if n_rs >= 0:
+                state[S_N_RS] = n_rs
+                return FOUND_ANALYTIC, i
+        if not push_successors(i, geo, footprint, local, goal, prims, costs, kappa_max, n_samples, region_m,
+                               lattice, n_lattice, hgrid, h_origin, h_cell_m, use_guide, guide, guide_weight,
+                               guide_cap_m, node_pose, node_g, node_parent, node_arc, node_cell, cell_stamp, cell_g,
+                               closed_stamp, heap_keys, heap_ids, state, corners, hit):
+            return NODES_FULL, -1
     return EXHAUSTED, -1
-
