@@ -13,10 +13,10 @@ records both verdicts: **footprint success** (no chassis contact with a ground-t
 0.3 m / 10°) and **reference-point success** (parked, the executed reference point never inside a ground-truth
 object nor outside the boundary). Planners (`experiments.registry`): NeuralParker (the site checkpoint,
 paper-faithful reference-point training, the 'paper' preset), "NeuralParker (footprint)"
-(``checkpoints/site_np_footprint.pt``, trained under the footprint convention, the 'footprint_best_of_n' preset:
-the best of its mean rollout and 32 seeded sampled rollouts, then wider rescue rounds, centred connector order; by
-default its row is left out with a note when the file is missing), NP-Guided A* and Hybrid A* (both searching
-under the footprint convention).
+(``checkpoints/site_np_footprint.pt``, trained under the footprint convention, the 'footprint_anytime' preset: its
+mean rollout when that keeps 0.2 m of clearance, else the best of it and 32 seeded sampled rollouts, then wider
+rescue rounds, centred connector order; by default its row is left out with a note when the file is missing),
+NP-Guided A* and Hybrid A* (both searching under the footprint convention).
 
 Every setting is a field of `ClosedLoopConfig`; the flags set the common ones and ``--set KEY=VALUE`` any other
 (`experiments.overrides`), e.g. ``--set clip_run.stitch=true clip_run.track_window=5``, ``--set
@@ -26,7 +26,8 @@ planner.neuralparker_footprint.samples=16``, ``--set planner.neuralparker_footpr
 
 The table is the ``tab:realworld`` analogue — footprint success with reference-point success in parentheses, L
 and reversals executed on each method's own footprint successes, median plan time over all calls — plus
-closed-loop columns (failure reasons, final pose error and cross-track error). Writes into the run folder
+every call's plan time (median, 90th percentile) with the stage that answered it, and closed-loop columns (failure
+reasons, final pose error and cross-track error). Writes into the run folder
 (default ``results/closed_loop/<timestamp>/``): ``records.csv`` / ``records.json`` (one row per clip × planner),
 ``table.md``, ``config.json`` (the resolved `ClosedLoopConfig`, the clips, the git commit), ``search_time.png`` and
 ``closed_loop.rrd`` (every run merged; the per-run files are in ``rrd/``; off-screen camera frames for the first
@@ -56,6 +57,7 @@ from experiments.overrides import apply_overrides
 from experiments.registry import PlannerOptions, build_planners, check_names, label
 from np_sim.cli import cli_boundary, fresh_folder, positive_int
 from np_sim.errors import ConfigError
+from np_sim.plan import PLAN_STAGES
 from tracking.clip_run import ClipRunConfig
 from tracking.rerun_log import merge_recordings
 
@@ -70,7 +72,7 @@ footprint-aware planner's settings were tuned; the first 94 are left out of its 
 SITE_PLANNERS = PlannerOptions(checkpoint=Path("checkpoints/site_np.pt"),
                                footprint_checkpoint=Path("checkpoints/site_np_footprint.pt"), convention="footprint",
                                benchmark="site")
-"""The shipped site checkpoints (paper-faithful, footprint-aware), the presets 'paper' and 'footprint_best_of_n',
+"""The shipped site checkpoints (paper-faithful, footprint-aware), the presets 'paper' and 'footprint_anytime',
 both searches under the footprint convention (the paper validates with the footprint)."""
 
 
@@ -150,7 +152,8 @@ def clip_rows(clip, planners: dict[str, Any], controller: str, rrd_dir: Path | N
                "plan_calls": len(run.calls), "plan_failures": sum(not c.success for c in run.calls),
                "plan_rejected": sum(bool(c.rejected) for c in run.calls),
                "plan_time_median_ms": float(np.median(times)), "plan_time_first_ms": float(times[0]),
-               "plan_time_max_ms": float(times.max()), "first_plan_success": int(first.success),
+               "plan_time_max_ms": float(times.max()), "plan_times_ms": [round(float(t), 3) for t in times],
+               "plan_stages": [c.stage for c in run.calls], "first_plan_success": int(first.success),
                "first_plan_reason": first.reason, "first_plan_L_m": L, "first_plan_reversals": rev,
                "first_plan_expanded_nodes": first.expanded_nodes,
                "first_plan_footprint_valid": int(run.first_plan_valid["footprint"]),
@@ -208,6 +211,10 @@ def planner_notes(names: list[str], config: ClosedLoopConfig) -> list[str]:
     footprint = config.planner.neuralparker_footprint
     if "neuralparker_footprint" not in names:
         return notes
+    if footprint.accept_mean_m is not None:
+        notes.append(f"NeuralParker (footprint) returns its mean rollout at once when that succeeds, is steerable "
+                     f"and keeps {footprint.accept_mean_m:g} m of clearance "
+                     f"(planner.neuralparker_footprint.accept_mean_m); otherwise:")
     if footprint.samples:
         notes.append(f"NeuralParker (footprint) plays the best of its mean rollout and {footprint.samples} sampled "
                      f"rollouts (np_policy.sampling; planner.neuralparker_footprint.samples=0 = the paper's planner).")
@@ -341,6 +348,7 @@ def format_table(records: list[dict], names: list[str], split: str = "eval") -> 
             f"{_mean(r['plan_calls'] for r in rows):.1f} / {_mean(r['plan_failures'] for r in rows):.1f} / "
             f"{_mean(r['plan_rejected'] for r in rows):.1f} | "
             f"{_mean(r['sim_time_s'] for r in rows):.1f} / {_mean(r['wall_time_s'] for r in rows):.2f} |")
+    lines += ["", *call_table(records, names)]
     lines += ["", "Succ.: executed footprint success (no chassis contact with a ground-truth object or wall, parked "
               "within 0.3 m / 10°) on all clips; in parentheses the reference-point success (parked, the executed "
               "reference point never inside a ground-truth object or outside the boundary). First plan valid: the "
@@ -350,6 +358,22 @@ def format_table(records: list[dict], names: list[str], split: str = "eval") -> 
               "vehicle)." + (" Paper column: Table tab:realworld (real-vehicle perception, paths validated in "
                              "simulation)." if held_out else "")]
     return "\n".join(lines)
+
+
+def call_table(records: list[dict], names: list[str]) -> list[str]:
+    """Markdown lines: per method, every planner call's plan time (median, 90th percentile) and, for a
+    staged-effort planner, how many calls each stage answered and their median time."""
+    lines = ["| Method | Planner calls | Plan time, all calls: median / p90 (ms) | Calls answered by the mean "
+             "rollout / the sampled round / the rescue rounds (median ms) |", "|---|---|---|---|"]
+    for name in names:
+        rows = [r for r in records if r["planner"] == name]
+        times = np.array([t for r in rows for t in r["plan_times_ms"]])
+        stages = np.array([s for r in rows for s in r["plan_stages"]])
+        split = " / ".join(f"{np.sum(stages == s)} ({_fmt(float(np.median(times[stages == s])), 1)})"
+                           if np.any(stages == s) else "0" for s in PLAN_STAGES)
+        lines.append(f"| {label(name)} | {len(times)} | {_fmt(float(np.median(times)), 1)} / "
+                     f"{_fmt(float(np.percentile(times, 90)), 1)} | {split if np.any(stages != '') else '–'} |")
+    return lines
 
 
 def search_time_figure(records: list[dict], path: Path) -> Path | None:

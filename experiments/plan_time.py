@@ -32,12 +32,9 @@ from experiments.overrides import apply_overrides
 from experiments.registry import PlannerOptions, build_planners, label
 from np_sim.cli import cli_boundary, fresh_folder, positive_int
 from np_sim.errors import StartInCollisionError
+from np_sim.plan import PLAN_STAGES
 from tracking.clip_run import ClipRunConfig
 from tracking.perception import perceived_scene
-
-STAGES = ("mean", "sampled", "rescue")
-"""Stages of a staged-effort planner (`np_sim.plan.Plan.stage`), cheapest first."""
-
 
 @dataclasses.dataclass(frozen=True)
 class PlanTimeConfig:
@@ -93,7 +90,8 @@ def summary(records: list[dict[str, Any]], names: list[str]) -> str:
         t = times(name)
         success = np.mean([r["success"] for r in records if r["planner"] == name])
         stages = Counter(r["stage"] for r in records if r["planner"] == name)
-        split = ", ".join(f"{s} {stages[s]} ({np.nanmedian(times(name, s)):.1f})" for s in STAGES if stages[s])
+        split = ", ".join(f"{s} {stages[s]} ({np.nanmedian(times(name, s)):.1f})"
+                          for s in PLAN_STAGES if stages[s])
         lines.append(f"| {label(name)} | {success:.2f} | {np.nanmedian(t):.1f} | {np.nanpercentile(t, 90):.1f} | "
                      f"{np.nanmedian(t) / base:.2f} | {split or '—'} |")
     return "\n".join(lines)

@@ -21,7 +21,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from np_policy.config import FOOTPRINT_BEST_OF_N, PAPER, NeuralParkerConfig
+from np_policy.config import FOOTPRINT_ANYTIME, PAPER, NeuralParkerConfig
 from np_sim.config import Convention
 from np_sim.errors import ConfigError
 from np_sim.planners.protocol import CONVENTIONS, Planner
@@ -41,8 +41,9 @@ class PlannerOptions:
     """How those planners play the policy (default the 'paper' preset)."""
     footprint_checkpoint: Path | None = None
     """Checkpoint of 'neuralparker_footprint' (the footprint-aware site policy)."""
-    neuralparker_footprint: NeuralParkerConfig = FOOTPRINT_BEST_OF_N
-    """How 'neuralparker_footprint' plays its policy (default the 'footprint_best_of_n' preset)."""
+    neuralparker_footprint: NeuralParkerConfig = FOOTPRINT_ANYTIME
+    """How 'neuralparker_footprint' plays its policy (default the 'footprint_anytime' preset: best of N, the mean
+    rollout returned at once when it keeps 0.2 m)."""
     convention: Convention = "reference_point"
     """Collision convention of the searches (Hybrid A*, NP-Guided A*, the staged prefix, OMPL RRT*)."""
     search_margin_m: float = 0.0

@@ -31,6 +31,11 @@ class HermiteSegment:
     """Δκ_H of eq:hermite-kappa (1/m)."""
 
 
+PLAN_STAGES = ("mean", "sampled", "rescue")
+"""Stages of a staged-effort planner, cheapest first (``Plan.stage``; `np_policy.planner`): the mean rollout
+accepted, the best of the sampled round, the best after the rescue rounds."""
+
+
 @dataclass(frozen=True, eq=False)
 class Plan:
     """A planner's answer from ``start``: success flag and reason, executed arcs, optional Hermite segment."""
@@ -50,8 +55,8 @@ class Plan:
     expanded_nodes: int = 0
     """Search nodes expanded (searches only)."""
     stage: str = ""
-    """Which stage of a staged-effort planner gave the plan (`np_policy.planner`: 'mean', 'sampled', 'rescue');
-    '' for planners of one stage."""
+    """Which stage of a staged-effort planner gave the plan (one of ``PLAN_STAGES``); '' for planners of one
+    stage."""
 
     def metrics(self) -> tuple[float, int, float]:
         """(L, reversals, Δκ) of paper eq:metrics."""

@@ -220,6 +220,8 @@ class PlanCall:
     """The plan's own planning time (s)."""
     rejected: str = ""
     """'' or why the tracker refused the successful plan (`tracking.executor.plan_problem`, e.g. 'steering_limit')."""
+    stage: str = ""
+    """The stage of a staged-effort planner that gave the plan (`np_sim.plan.Plan.stage`), '' for others."""
 
     @property
     def usable(self) -> bool:
@@ -317,7 +319,7 @@ class ReplanningLoop:
             plan = Plan(start=np.asarray(pose, float), reason=f"refused: {error}")
         rejected = plan_problem(plan, self.tracker)[0] if plan.success else ""
         self.calls.append(PlanCall(time_s=t, frame=frame, success=bool(plan.success), plan_time_s=plan.plan_time_s,
-                                   rejected=rejected))
+                                   rejected=rejected, stage=plan.stage))
         if not self.last_usable:
             self.retry_at_s = t + self.config.retry_period_s
         if self.log is not None:

@@ -4,6 +4,7 @@ import csv
 import json
 import re
 
+import numpy as np
 import pytest
 import torch
 
@@ -11,7 +12,7 @@ from experiments.closed_loop import SITE_PLANNERS, ClosedLoopConfig, main
 from experiments.overrides import apply_overrides
 from experiments.registry import build_planners
 from np_policy.checkpoint import save_checkpoint
-from np_policy.config import FOOTPRINT_BEST_OF_N, PAPER
+from np_policy.config import FOOTPRINT_ANYTIME, PAPER
 from np_policy.network import ActorCritic
 from np_policy.train import TrainConfig, benchmark_defaults
 
@@ -50,7 +51,15 @@ def test_two_clips_run_end_to_end_and_the_known_feasible_clip_parks(tmp_path, si
         assert (r["footprint_success"] == "1") == (r["reason"] == "")
     assert "| Hybrid A* |" in result["table"] and "| NeuralParker |" in result["table"]
     assert "0.60 (0.93) / 7.0 / 1.20 / 0.37" in result["table"]  # the paper's column on the held-out clips
-    assert json.loads((out / "records.json").read_text())[1]["planner"] == "hybrid_astar"
+    records = json.loads((out / "records.json").read_text())
+    assert records[1]["planner"] == "hybrid_astar" and set(records[1]["plan_stages"]) == {""}
+    calls = sum(r["plan_calls"] for r in records if r["planner"] == "neuralparker")
+    assert all(len(r["plan_times_ms"]) == len(r["plan_stages"]) == r["plan_calls"] for r in records)
+    assert {s for r in records if r["planner"] == "neuralparker" for s in r["plan_stages"]} == {"mean"}
+    times = [t for r in records if r["planner"] == "neuralparker" for t in r["plan_times_ms"]]
+    row = f"| NeuralParker | {calls} | {np.median(times):.1f} / {np.percentile(times, 90):.1f} | {calls} ("
+    assert row in result["table"]
+    assert "| Hybrid A* | " in result["table"] and result["table"].count(" | – |") >= 1
     assert (out / "table.md").exists() and (out / "closed_loop.rrd").stat().st_size > 0
     assert len(list((out / "rrd").glob("*.rrd"))) == 4
     config = json.loads((out / "config.json").read_text())
@@ -105,7 +114,8 @@ def _untimed(row: dict) -> str:
     return json.dumps({k: v for k, v in row.items() if k not in TIMING_COLUMNS}, sort_keys=True)
 
 
-TIMING_COLUMNS = ("plan_time_median_ms", "plan_time_first_ms", "plan_time_max_ms", "wall_time_s", "realtime_factor")
+TIMING_COLUMNS = ("plan_time_median_ms", "plan_time_first_ms", "plan_time_max_ms", "plan_times_ms", "wall_time_s",
+                  "realtime_factor")
 """The record columns measured on the wall clock; every other column is a function of the seeds and settings."""
 
 
@@ -116,18 +126,19 @@ def test_footprint_preset_fields_reach_the_planner_and_the_config(tmp_path):
           "planner.neuralparker_footprint.samples=4", rescue, "--out", str(out)])
     config = json.loads((out / "config.json").read_text())["config"]["planner"]["neuralparker_footprint"]
     assert config["samples"] == 4 and config["connector"] == "centred" and config["rescue_clearance_m"] == 0.2
-    assert config["rescue"] == [[8, 2.0, "policy"], [6, 1.0, "uniform"]]
+    assert config["rescue"] == [[8, 2.0, "policy"], [6, 1.0, "uniform"]] and config["accept_mean_m"] == 0.2
     table = (out / "table.md").read_text()
+    assert "returns its mean rollout at once when that succeeds, is steerable and keeps 0.2 m of clearance" in table
     assert "best of its mean rollout and 4 sampled rollouts" in table and "terminal connector: centred" in table
     assert ("When none of them succeeds or the best keeps less than 0.2 m clearance it samples 8 at 2 σ, then 6 "
             "at 1 σ after a uniform first arc (planner.neuralparker_footprint.rescue)." in table)
 
 
 def test_the_default_site_planners_are_the_presets():
-    """The footprint row plays the 'footprint_best_of_n' preset (rescue rounds at 2, 3 and 1 σ of the policy's
+    """The footprint row plays the 'footprint_anytime' preset (rescue rounds at 2, 3 and 1 σ of the policy's
     own standard deviation), the paper-faithful row and NP-Guided A*'s guide the 'paper' preset with the site
     checkpoint's connector (the paper's order); both searches plan under the footprint convention."""
-    assert SITE_PLANNERS.neuralparker == PAPER and SITE_PLANNERS.neuralparker_footprint == FOOTPRINT_BEST_OF_N
+    assert SITE_PLANNERS.neuralparker == PAPER and SITE_PLANNERS.neuralparker_footprint == FOOTPRINT_ANYTIME
     planners = build_planners(["neuralparker", "neuralparker_footprint", "np_guided_astar", "hybrid_astar"],
                               SITE_PLANNERS)
     default = planners["neuralparker_footprint"]
