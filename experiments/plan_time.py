@@ -36,6 +36,7 @@ from np_sim.plan import PLAN_STAGES
 from tracking.clip_run import ClipRunConfig
 from tracking.perception import perceived_scene
 
+
 @dataclasses.dataclass(frozen=True)
 class PlanTimeConfig:
     """What ``experiments.plan_time`` measures (``--set`` reaches every field by its dotted path)."""
