@@ -87,6 +87,17 @@ def existing_file(text: str) -> Path:
     return path
 
 
+def vehicle_spec(text: str):
+    """A vehicle: a preset name ('sedan', 'van') or a vehicle JSON file (`np_sim.vehicle.load_vehicle`); a bad
+    file is refused at parse time with its file and field."""
+    from np_sim.vehicle import load_vehicle
+
+    try:
+        return load_vehicle(text)
+    except NPSimError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
 def output_folder(text: str) -> Path:
     """A folder to write into, created when missing (an existing file is refused at parse time)."""
     path = Path(text)

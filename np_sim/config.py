@@ -193,6 +193,12 @@ class EnvConfig:
                 f"ConnectorConfig.kappa_max={self.connector.kappa_max} exceeds VehicleSpec.kappa_max={self.vehicle.kappa_max}"
             )
 
+    def for_vehicle(self, vehicle: VehicleSpec) -> "EnvConfig":
+        """This env for ``vehicle``: its footprint (checks, LiDAR ranges b_i), its κ_max as the action bound, and
+        that κ_max as the connector's curvature bound κ̄ too (the paper's 0.68 is the default vehicle's)."""
+        return dataclasses.replace(self, vehicle=vehicle,
+                                   connector=dataclasses.replace(self.connector, kappa_max=vehicle.kappa_max))
+
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict (JSON-safe)."""
         return dataclasses.asdict(self)
