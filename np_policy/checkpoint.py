@@ -29,6 +29,7 @@ import numpy as np
 import torch
 
 from np_sim.errors import NPSimError
+from np_sim.vehicle import VehicleSpec
 
 CHECKPOINT_FORMAT = "neuralparker-checkpoint-v2"
 LEGACY_FORMAT = "neuralparker-checkpoint-v1"
@@ -257,6 +258,16 @@ def check_layout(path: str | Path, stored: dict[str, Any], expected: dict[str, A
             f"{path}: its observation layout ({stored_name}: {describe_layout(stored)}) is not the one of "
             f"{expected_name} ({describe_layout(expected)}); use a checkpoint trained for {expected_name}. "
             "Differing fields:\n  " + "\n  ".join(f"observation.{d}" for d in diffs))
+
+
+def check_vehicle(path: str | Path, trained: VehicleSpec, vehicle: VehicleSpec) -> None:
+    """CheckpointError naming ``path`` and both vehicles when the policy in ``path`` was trained for ``trained``
+    and is asked to plan for another ``vehicle``: its actions are scaled by the trained κ_max and its LiDAR
+    clearances and checks use the trained footprint (spec §3)."""
+    if trained != vehicle:
+        raise CheckpointError(f"{path}: trained for the vehicle {trained.describe()}, refused for the vehicle "
+                              f"{vehicle.describe()}; plan with a policy trained for this vehicle "
+                              "(python -m np_policy.train --vehicle ...) or pass the vehicle it was trained for")
 
 
 def load_weights(module: torch.nn.Module, state: dict[str, Any], path: str | Path, what: str = "model") -> None:

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from np_policy.checkpoint import load_checkpoint, load_weights
+from np_policy.checkpoint import check_vehicle, load_checkpoint, load_weights
 from np_policy.config import PAPER, NeuralParkerConfig, TrainConfig, check_benchmark_layout, checkpoint_config
 from np_policy.inference import CompiledActor
 from np_policy.network import ActorCritic
@@ -35,6 +35,7 @@ from np_sim.config import EnvConfig
 from np_sim.plan import Plan
 from np_sim.scene import Scene
 from np_sim.validate import validation_failure
+from np_sim.vehicle import VehicleSpec
 
 
 def query_seed(seed: int, start) -> np.random.SeedSequence:
@@ -53,14 +54,18 @@ class Policy:
     """The run's config, as stored in the checkpoint."""
 
     @classmethod
-    def load(cls, path: str | Path, benchmark: str | None = None) -> "Policy":
+    def load(cls, path: str | Path, benchmark: str | None = None, vehicle: VehicleSpec | None = None) -> "Policy":
         """Rebuild the network and config stored in a checkpoint (CheckpointError on a bad file). ``benchmark``
         ('factorial', 'topology', 'examples', 'site'), when given, names the scenes it will plan: a checkpoint of
-        another observation layout is refused here, with both layouts named (`check_benchmark_layout`)."""
+        another observation layout is refused here, with both layouts named (`check_benchmark_layout`).
+        ``vehicle``, when given, is the vehicle it will plan for: a checkpoint trained for another one is refused,
+        with both vehicles named (`np_policy.checkpoint.check_vehicle`)."""
         payload = load_checkpoint(path)
         config = checkpoint_config(path, payload)
         if benchmark is not None:
             check_benchmark_layout(path, config, benchmark)
+        if vehicle is not None:
+            check_vehicle(path, config.env.vehicle, vehicle)
         model = ActorCritic(config.env.observation, config.network)
         load_weights(model, payload["model"], path)
         return cls(model, config)
@@ -103,12 +108,12 @@ class NeuralParkerPlanner:
 
     @classmethod
     def from_checkpoint(cls, path: str | Path, config: NeuralParkerConfig | str = PAPER,
-                        benchmark: str | None = None) -> "NeuralParkerPlanner":
-        """The planner of the policy stored in ``path`` (`Policy.load`, with its ``benchmark`` check), playing it
-        as ``config`` says: a `NeuralParkerConfig` or the name of one of ``PRESETS``."""
+                        benchmark: str | None = None, vehicle: VehicleSpec | None = None) -> "NeuralParkerPlanner":
+        """The planner of the policy stored in ``path`` (`Policy.load`, with its ``benchmark`` and ``vehicle``
+        checks), playing it as ``config`` says: a `NeuralParkerConfig` or the name of one of ``PRESETS``."""
         if isinstance(config, str):
             config = NeuralParkerConfig.preset(config)
-        return cls(Policy.load(path, benchmark), config)
+        return cls(Policy.load(path, benchmark, vehicle), config)
 
     def plan(self, scene: Scene, start) -> Plan:
         """Roll out the mean action from ``start`` until success, collision or the arc budget (paper §III-A); with
