@@ -18,13 +18,14 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from np_policy.config import FOOTPRINT_ANYTIME, PAPER, NeuralParkerConfig
 from np_sim.config import Convention
 from np_sim.errors import ConfigError
 from np_sim.planners.protocol import CONVENTIONS, Planner
+from np_sim.vehicle import VehicleSpec
 
 PolicyLoader = Callable[[Path], object]
 """``load(path) -> np_policy.planner.Policy``: the policy stored in ``path``, loaded once per ``build_planners``."""
@@ -55,6 +56,9 @@ class PlannerOptions:
     benchmark: str | None = None
     """The scenes the planners will plan ('factorial', 'topology', 'examples', 'site'): a checkpoint of another
     observation layout is refused when loaded; None checks nothing."""
+    vehicle: VehicleSpec = field(default_factory=VehicleSpec)
+    """The vehicle planned for: the searches' footprint and κ_max; a learned planner's checkpoint trained for
+    another vehicle is refused when loaded."""
 
     def __post_init__(self) -> None:
         if self.convention not in CONVENTIONS:
@@ -89,9 +93,8 @@ def required_checkpoint(path: Path | None, name: str, how: str = "--checkpoint P
 
 def _search(options: PlannerOptions):
     from np_sim.planners import HybridAStar, HybridAStarConfig
-    from np_sim.vehicle import VehicleSpec
 
-    config = HybridAStarConfig(vehicle=VehicleSpec().inflated(options.search_margin_m))
+    config = HybridAStarConfig(vehicle=options.vehicle.inflated(options.search_margin_m))
     return HybridAStar(config, convention=options.convention)
 
 
@@ -121,7 +124,8 @@ def _ompl_rrtstar(options: PlannerOptions, load: PolicyLoader) -> Planner:
     from np_sim.planners.ompl_peer import OmplPeer, OmplPeerConfig
 
     budget = _search(options).config.time_budget_s
-    return OmplPeer(OmplPeerConfig(time_budget_s=budget, seed=options.ompl_seed), options.convention)
+    return OmplPeer(OmplPeerConfig(time_budget_s=budget, seed=options.ompl_seed, vehicle=options.vehicle),
+                    options.convention)
 
 
 def _neuralparker(options: PlannerOptions, load: PolicyLoader) -> Planner:
@@ -138,8 +142,12 @@ def _neuralparker_footprint(options: PlannerOptions, load: PolicyLoader) -> Plan
 
 def _hope(options: PlannerOptions, load: PolicyLoader) -> Planner:
     from hope_policy.planner import HopePlanner
+    from np_policy.checkpoint import check_vehicle
 
-    return HopePlanner.from_checkpoint(required_checkpoint(options.hope_checkpoint, "hope", "--hope-checkpoint PATH"))
+    path = required_checkpoint(options.hope_checkpoint, "hope", "--hope-checkpoint PATH")
+    planner = HopePlanner.from_checkpoint(path)
+    check_vehicle(path, planner.config.env.vehicle, options.vehicle)
+    return planner
 
 
 REGISTRY: dict[str, Entry] = {
@@ -170,9 +178,10 @@ def check_names(names, allowed=None) -> list[str]:
 
 def build_planners(names, options: PlannerOptions) -> dict[str, Planner]:
     """One planner per name, in order (FileNotFoundError when a learned planner's checkpoint is missing,
-    CheckpointError when it is broken or of another observation layout than ``options.benchmark``'s)."""
+    CheckpointError when it is broken, of another observation layout than ``options.benchmark``'s or trained for
+    another vehicle than ``options.vehicle``)."""
     from np_policy.planner import Policy
 
     check_names(names)
-    load = functools.cache(lambda path: Policy.load(path, options.benchmark))
+    load = functools.cache(lambda path: Policy.load(path, options.benchmark, options.vehicle))
     return {name: REGISTRY[name].factory(options, load) for name in names}
