@@ -2,7 +2,7 @@
 ``tab:twostage``, §V-F).
 
 ``python -m experiments.planners --benchmark factorial|topology [--checkpoint PATH] [--methods ...]
-[--convention reference_point|footprint] [--limit N] [--out DIR]``
+[--convention reference_point|footprint] [--vehicle sedan|van|FILE] [--limit N] [--out DIR]``
 
 Methods: Hybrid A*, NP-Guided A* (Hybrid A* guided by one NeuralParker rollout), the OMPL peer (RRT* in a
 Reeds–Shepp space, same time budget as Hybrid A*), NeuralParker (the checkpoint's deterministic policy) and the
@@ -13,8 +13,11 @@ run; plan time median and 90th percentile; expanded nodes (search methods: latti
 vertices) median; beside success, the exact validity of the planned paths (`np_sim.validate`: the footprint and
 the reference point swept continuously; a failure counts as invalid) and, below the table, the successes that fail
 the rule their method is scored by (the paper's samples, or the env's footprint samples; NeuralParker: its
-checkpoint's convention). Writes ``records.csv``/``records.json`` (one row per episode and method), ``table.md`` and
-``config.json`` into the run folder.
+checkpoint's convention). ``--vehicle`` plans for another vehicle (`np_sim.vehicle`: the searches' footprint and
+κ_max, the validators' footprint; a learned planner's checkpoint must have been trained for it); the frozen starts
+were drawn for the default car, so each record says whether the vehicle's footprint at its start is free
+(``start_footprint_free``) and the table counts those that are not. Writes ``records.csv``/``records.json`` (one
+row per episode and method), ``table.md`` and ``config.json`` into the run folder.
 """
 
 from __future__ import annotations
@@ -30,9 +33,11 @@ from tqdm import tqdm
 from experiments.common import first, git_commit, run_folder, write_records
 from experiments.registry import PlannerOptions, build_planners, check_names, label
 from np_sim.benchmarks import frozen_starts, load_benchmark
-from np_sim.cli import cli_boundary, fresh_folder, non_negative_int, positive_int
+from np_sim.cli import cli_boundary, fresh_folder, non_negative_int, positive_int, vehicle_spec
+from np_sim.collision import path_valid
 from np_sim.planners import HybridAStar
 from np_sim.validate import plan_valid, scoring_rule
+from np_sim.vehicle import VehicleSpec
 
 METHODS = ("hybrid_astar", "np_guided_astar", "ompl_rrtstar", "neuralparker", "staged_astar_np", "hope")
 """Planners of the table (`experiments.registry`), in its row order."""
@@ -43,11 +48,14 @@ DEFAULT_CHECKPOINT = Path("checkpoints/factorial_np_seed0.pt")
 
 def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | None = DEFAULT_CHECKPOINT,
         convention: str = "reference_point", out: Path | None = None, limit: int | None = None, ompl_seed: int = 0,
-        progress: bool = True, hope_checkpoint: Path | None = None) -> dict[str, Any]:
-    """Plan every frozen start with every method; returns the records, the table text and the run folder."""
+        progress: bool = True, hope_checkpoint: Path | None = None,
+        vehicle: VehicleSpec | None = None) -> dict[str, Any]:
+    """Plan every frozen start with every method for ``vehicle`` (default the sedan); returns the records, the
+    table text and the run folder."""
     methods = check_names(DEFAULT_METHODS if methods is None else methods, METHODS)
+    vehicle = VehicleSpec() if vehicle is None else vehicle
     options = PlannerOptions(checkpoint=checkpoint, convention=convention, ompl_seed=ompl_seed, benchmark=benchmark,
-                             hope_checkpoint=hope_checkpoint)
+                             hope_checkpoint=hope_checkpoint, vehicle=vehicle)
     planners = build_planners(methods, options)
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
@@ -55,6 +63,7 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
     folder = run_folder("planners", out)
     records: list[dict[str, Any]] = []
     for k, j in tqdm(episodes, desc=f"planners/{benchmark}", unit="ep", disable=not progress):
+        free = int(path_valid(scenes[k], starts[k, j][None], "footprint", vehicle))
         for method in methods:
             plan = planners[method].plan(scenes[k], starts[k, j])
             L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))
@@ -64,15 +73,17 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
                             "reversals": rev, "delta_kappa": dk, "plan_time_ms": 1e3 * plan.plan_time_s,
                             "expanded_nodes": plan.expanded_nodes,
                             "guide_time_ms": 1e3 * getattr(plan, "guide_time_s", float("nan")),
-                            "scored_valid": int(plan_valid(scenes[k], plan, scoring_rule(scored))),
-                            "exact_footprint_valid": int(plan_valid(scenes[k], plan, "exact", "footprint")),
-                            "exact_ref_point_valid": int(plan_valid(scenes[k], plan, "exact", "reference_point"))})
+                            "start_footprint_free": free,
+                            "scored_valid": int(plan_valid(scenes[k], plan, scoring_rule(scored), vehicle=vehicle)),
+                            "exact_footprint_valid": int(plan_valid(scenes[k], plan, "exact", "footprint", vehicle)),
+                            "exact_ref_point_valid": int(plan_valid(scenes[k], plan, "exact", "reference_point",
+                                                                    vehicle))})
     table = format_table(records, methods)
     write_records(folder, records)
     (folder / "table.md").write_text(table + "\n")
     (folder / "config.json").write_text(json.dumps({
         "benchmark": benchmark, "methods": methods, "checkpoint": None if checkpoint is None else str(checkpoint),
-        "convention": convention, "episodes": len(episodes), "ompl_seed": ompl_seed,
+        "convention": convention, "vehicle": vehicle.to_dict(), "episodes": len(episodes), "ompl_seed": ompl_seed,
         "neuralparker": options.neuralparker.to_dict(),
         "hybrid_astar": {k: v for k, v in vars(planners.get("hybrid_astar", HybridAStar()).config).items()
                          if k != "vehicle"},
@@ -103,6 +114,10 @@ def format_table(records: list[dict[str, Any]], methods: list[str]) -> str:
                     for m, rows in by_method.items()}
     lines += ["", "Successes failing the rule they are scored by: "
               + ", ".join(f"{label} {n}" for label, n in false_claims.items()) + "."]
+    blocked = {(r["scene"], r["start_id"]) for r in records if not r["start_footprint_free"]}
+    if blocked:
+        lines += ["", f"Starts where the vehicle's footprint is not free (drawn for the default car): {len(blocked)} "
+                      f"of {len({(r['scene'], r['start_id']) for r in records})} (records: start_footprint_free = 0)."]
     if {"hybrid_astar", "np_guided_astar"} <= set(methods):
         hybrid = np.median([r["plan_time_ms"] for r in by_method["hybrid_astar"]])
         guided = by_method["np_guided_astar"]
@@ -128,13 +143,16 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--hope-checkpoint", type=Path,
                         help="adapted-HOPE checkpoint for the hope method (hope_policy.train's final.pt)")
     parser.add_argument("--convention", choices=["reference_point", "footprint"], default="reference_point")
+    parser.add_argument("--vehicle", type=vehicle_spec, default=VehicleSpec(),
+                        help="vehicle planned for: a preset (sedan, the default; van) or a vehicle JSON file "
+                             "(docs/vehicles.md)")
     parser.add_argument("--ompl-seed", type=non_negative_int, default=0, help="OMPL's random seed")
     parser.add_argument("--out", type=fresh_folder,
                         help="new or empty run folder (default: a fresh results/planners/<timestamp>)")
     parser.add_argument("--limit", type=positive_int, help="only the first N frozen episodes (smoke runs)")
     args = parser.parse_args(argv)
     result = run(args.benchmark, args.methods, args.checkpoint, args.convention, args.out, args.limit, args.ompl_seed,
-                 hope_checkpoint=args.hope_checkpoint)
+                 hope_checkpoint=args.hope_checkpoint, vehicle=args.vehicle)
     print(result["table"])
     print(f"records: {result['folder'] / 'records.csv'}")
     return result
