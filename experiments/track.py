@@ -1,8 +1,8 @@
 """Closed-loop tracking of planned paths on the benchmark frozen starts (spec §8).
 
 ``python -m experiments.track --benchmark factorial --planner hybrid_astar [--convention footprint]
-[--per-scene K] [--limit N] [--controller lqr|stanley|pure_pursuit|all] [--rrd-episodes N] [--no-render]
-[--out DIR]``
+[--vehicle sedan|van|FILE] [--per-scene K] [--limit N] [--controller lqr|stanley|pure_pursuit|all]
+[--rrd-episodes N] [--no-render] [--out DIR]``
 
 Every frozen start of the benchmark's test scenes (1,080 Factorial, 720 Topology-Stress; ``--per-scene K`` keeps
 the first K of the 40 starts of every scene, ``--limit`` then the first N episodes in scene order) is planned
@@ -12,13 +12,17 @@ the exact swept footprint, `tracking.validators`) and executed on the MuJoCo veh
 conventions and the exact swept footprint, executed
 closed-loop success (no body contact, parked within 0.3 m / 10°) on all episodes and on the footprint-valid
 plans, tracking errors (mean over executed runs of the per-run cross-track RMS and max; final pose error of the
-executed successes) and the median real-time factor. Writes ``records.csv``/``records.json`` (one row per
-episode and controller), ``table.md``, ``config.json`` and the first ``--rrd-episodes`` runs as ``.rrd`` files.
+executed successes) and the median real-time factor. ``--vehicle`` (`np_sim.vehicle`) is the vehicle planned
+for, validated and driven: the planner's footprint and κ_max, the validators' footprint and the MuJoCo vehicle
+built from it (`tracking.mjcf`); a start where its footprint is not free (the frozen starts were drawn for the
+default car) is executed as 'start_in_collision'. Writes ``records.csv``/``records.json`` (one row per episode and
+controller), ``table.md``, ``config.json`` and the first ``--rrd-episodes`` runs as ``.rrd`` files.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -30,8 +34,10 @@ from tqdm import tqdm
 from experiments.common import first, git_commit, run_folder, write_records
 from experiments.registry import PlannerOptions, build_planners, check_names
 from np_sim.benchmarks import frozen_starts, load_benchmark
-from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int
+from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int, vehicle_spec
 from np_sim.errors import ConfigError
+from np_sim.vehicle import VehicleSpec
+from tracking.config import TrackerConfig
 from tracking.controllers import CONTROLLERS
 from tracking.executor import execute
 from tracking.validators import validate_plan
@@ -44,14 +50,17 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
           convention: str = "footprint", checkpoint: Path | None = None, limit: int | None = None,
           per_scene: int | None = None,
           out: Path | None = None, rrd_episodes: int = 0, render: bool = True,
-          progress: bool = True) -> dict[str, Any]:
-    """Plan, validate and execute the frozen starts; returns the records, the table and the run folder."""
+          progress: bool = True, vehicle: VehicleSpec | None = None) -> dict[str, Any]:
+    """Plan, validate and execute the frozen starts for ``vehicle`` (default the sedan); returns the records, the
+    table and the run folder."""
     for c in controllers:
         if c not in CONTROLLERS:
             raise ConfigError(f"--controller: expected one of {sorted(CONTROLLERS)} or 'all', got {c!r}")
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
-    options = PlannerOptions(checkpoint=checkpoint, convention=convention, benchmark=benchmark)
+    vehicle = VehicleSpec() if vehicle is None else vehicle
+    tracker = dataclasses.replace(TrackerConfig(), vehicle=vehicle)
+    options = PlannerOptions(checkpoint=checkpoint, convention=convention, benchmark=benchmark, vehicle=vehicle)
     source = build_planners(check_names([planner], PLANNERS), options)[planner]
     per_scene = len(first(range(starts.shape[1]), per_scene, "--per-scene"))
     episodes = first([(k, j) for k in range(len(scenes)) for j in range(per_scene)], limit)
@@ -60,7 +69,7 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
     for n, (k, j) in enumerate(tqdm(episodes, desc=f"{planner} → MuJoCo", unit="ep", disable=not progress)):
         scene = scenes[k]
         plan = source.plan(scene, starts[k, j])
-        valid = validate_plan(scene, plan)
+        valid = validate_plan(scene, plan, vehicle)
         L, rev, _ = plan.metrics() if plan.success else (math.nan, -1, math.nan)
         base = {"scene": scene.name, "start_id": j, "planner": planner, "convention": convention,
                 "plan_success": int(plan.success), "plan_reason": plan.reason, "plan_time_ms": 1e3 * plan.plan_time_s,
@@ -70,13 +79,15 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
                 "exact_footprint_valid": int(valid["exact_footprint"])}
         for controller in controllers:
             rrd = folder / "rrd" / f"{scene.name}_{j:02d}_{controller}.rrd" if n < rrd_episodes else None
-            record = execute(scene, plan, controller=controller, render=render and rrd is not None, rerun_path=rrd)
+            record = execute(scene, plan, controller=controller, render=render and rrd is not None, rerun_path=rrd,
+                             config=tracker)
             records.append({**base, **record.to_row()})
     table = format_table(records, controllers)
     write_records(folder, records)
     (folder / "table.md").write_text(table + "\n")
     (folder / "config.json").write_text(json.dumps(
-        {"benchmark": benchmark, "planner": planner, "convention": convention, "checkpoint": str(checkpoint),
+        {"benchmark": benchmark, "planner": planner, "convention": convention, "vehicle": vehicle.to_dict(),
+         "checkpoint": str(checkpoint),
          "controllers": list(controllers), "episodes": len(episodes), "per_scene": per_scene, "limit": limit,
          "rrd_episodes": rrd_episodes,
          "render": render, "git_commit": git_commit()}, indent=2))
@@ -125,6 +136,9 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--checkpoint", type=existing_file, default=None,
                         help="policy checkpoint of the learned planners (neuralparker, np_guided_astar, "
                              "staged_astar_np)")
+    parser.add_argument("--vehicle", type=vehicle_spec, default=VehicleSpec(),
+                        help="vehicle planned for and driven: a preset (sedan, the default; van) or a vehicle JSON "
+                             "file (docs/vehicles.md)")
     parser.add_argument("--controller", choices=[*CONTROLLERS, "all"], default="lqr",
                         help="lqr, stanley, pure_pursuit or all")
     parser.add_argument("--per-scene", type=positive_int, default=None,
@@ -138,7 +152,7 @@ def main(argv=None) -> dict[str, Any]:
     args = parser.parse_args(argv)
     controllers = tuple(CONTROLLERS) if args.controller == "all" else (args.controller,)
     result = track(args.benchmark, args.planner, controllers, args.convention, args.checkpoint, args.limit,
-                   args.per_scene, args.out, args.rrd_episodes, not args.no_render)
+                   args.per_scene, args.out, args.rrd_episodes, not args.no_render, vehicle=args.vehicle)
     print(result["table"])
     print(f"results in {result['folder']}")
     return result
