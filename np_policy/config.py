@@ -351,6 +351,9 @@ ACTIONS = ("mean", "sample")
 per arc (each arc ``clip(μ(o) + σ·ε, −1, 1)``: what a Tianshou PPO policy plays at test time unless it is built
 with ``deterministic_eval=True``)."""
 
+OVER_CAPACITY = ("nearest", "refuse")
+"""What a NeuralParker planner does with a scene of more obstacles than its slots (``NeuralParkerConfig``)."""
+
 RescueRound = tuple[int, float, str]
 """One rescue round: (rollouts, standard-deviation scale, first arc 'policy' or 'uniform')."""
 
@@ -407,8 +410,15 @@ class NeuralParkerConfig:
     """Seed of the sampled rollouts (rescue round k: ``seed + 1 + k``) and of ``action='sample'``."""
     weights: ChoiceWeights = field(default_factory=ChoiceWeights)
     """How the best plan is chosen (`np_policy.sampling.ChoiceWeights`)."""
+    over_capacity: str = "nearest"
+    """A scene with more obstacles than the policy's slots: 'nearest' observes the nearest ones, re-selected after
+    every arc, while every check stays on the whole scene (the site's rule, `np_sim.nearest`); 'refuse' raises
+    CapacityError. A scene within the slots is observed whole either way."""
 
     def __post_init__(self) -> None:
+        if self.over_capacity not in OVER_CAPACITY:
+            raise ConfigError(f"NeuralParkerConfig.over_capacity: expected one of {OVER_CAPACITY}, got "
+                              f"{self.over_capacity!r}")
         if self.connector is not None and self.connector not in CONNECTOR_VARIANTS:
             raise ConfigError(f"NeuralParkerConfig.connector: expected one of {CONNECTOR_VARIANTS} or None, got "
                               f"{self.connector!r}")

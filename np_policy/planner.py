@@ -13,6 +13,10 @@ footprint convention the exact swept footprint, which a rollout checked at 30 sa
 samples; such a rollout becomes a failure 'validation: …'. ``action='sample'`` plays one rollout of sampled actions
 instead of the mean (seeded per query, `query_seed`): how a policy trained with Tianshou acts at test time by
 default, for comparisons with figures measured that way.
+
+A scene with more obstacles than the policy's slots (a real lot) is observed by the site's rule unless
+``config.over_capacity`` is 'refuse': the nearest obstacles fill the slots, re-selected after every arc, while the
+rollout's arc and connector checks and the validation of the plan see the whole scene (`np_sim.nearest`).
 """
 
 from __future__ import annotations
@@ -98,13 +102,14 @@ class NeuralParkerPlanner:
         self.env_config = planning_env(policy, config)
         self.convention = self.env_config.collision
         std = self.model.log_std.detach().exp().numpy()
-        self.mean = PolicyRollouts(self.actor, np.zeros(2), self.env_config)
-        self.sampled = (PolicyRollouts(self.actor, std, self.env_config, config.samples, config.seed)
+        nearest = config.over_capacity == "nearest"
+        self.mean = PolicyRollouts(self.actor, np.zeros(2), self.env_config, nearest=nearest)
+        self.sampled = (PolicyRollouts(self.actor, std, self.env_config, config.samples, config.seed, nearest=nearest)
                         if config.samples else None)
-        self.single = (PolicyRollouts(self.actor, std, self.env_config, 1, config.seed)
+        self.single = (PolicyRollouts(self.actor, std, self.env_config, 1, config.seed, nearest=nearest)
                        if config.action == "sample" else None)
-        self.rescue = [PolicyRollouts(self.actor, std * scale, self.env_config, n, config.seed + 1 + k, first_arc)
-                       for k, (n, scale, first_arc) in enumerate(config.rescue)]
+        self.rescue = [PolicyRollouts(self.actor, std * scale, self.env_config, n, config.seed + 1 + k, first_arc,
+                                      nearest) for k, (n, scale, first_arc) in enumerate(config.rescue)]
 
     @classmethod
     def from_checkpoint(cls, path: str | Path, config: NeuralParkerConfig | str = PAPER,

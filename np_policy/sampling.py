@@ -67,7 +67,9 @@ class PolicyRollouts:
     (module docstring)."""
 
     def __init__(self, actor, std: np.ndarray, config: EnvConfig, n: int = 1, seed: int = 0,
-                 first_arc: str = "policy"):
+                 first_arc: str = "policy", nearest: bool = False):
+        """``nearest``: a scene with more obstacles than the policy's slots is observed by the site's rule
+        (`np_sim.nearest`), its checks still on the whole scene; otherwise it is a CapacityError."""
         if int(n) < 1:
             raise ValueError(f"PolicyRollouts: n must be >= 1 rollout, got {n!r}")
         if first_arc not in FIRST_ARCS:
@@ -76,13 +78,13 @@ class PolicyRollouts:
         if std.shape != (2,) or not np.all(np.isfinite(std)) or np.any(std < 0):
             raise ValueError(f"PolicyRollouts: std must be two finite numbers >= 0, got {std.tolist()}")
         self.actor, self.std, self.config, self.n, self.seed = actor, std, config, int(n), int(seed)
-        self.first_arc = first_arc
+        self.first_arc, self.nearest = first_arc, bool(nearest)
         self._cores: weakref.WeakKeyDictionary[Scene, BatchCore] = weakref.WeakKeyDictionary()
 
     def _core(self, scene: Scene) -> BatchCore:
         core = self._cores.get(scene)
         if core is None:
-            core = BatchCore([scene], self.n, self.config, None)
+            core = BatchCore([scene], self.n, self.config, None, nearest=self.nearest)
             self._cores[scene] = core
         return core
 

@@ -17,6 +17,7 @@ from np_sim.kernels.collision import pose_valid
 from np_sim.kernels.geometry import beam_offsets
 from np_sim.kernels.hermite import hermite_basis
 from np_sim.lidar import footprint_ranges
+from np_sim.nearest import NearestObjects, exceeds_slots
 from np_sim.observation import bev_encoder, observation_sections, observation_size, static_slots
 from np_sim.scene import Scene
 from np_sim.scene_arrays import pack_scenes
@@ -85,7 +86,11 @@ def step_outcome(R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 class BatchCore:
     """State of ``num_envs`` episodes over a list of scenes, stepped by one compiled call."""
 
-    def __init__(self, scenes: Sequence[Scene], num_envs: int, config: EnvConfig, start_sampler: StartSampler | None):
+    def __init__(self, scenes: Sequence[Scene], num_envs: int, config: EnvConfig, start_sampler: StartSampler | None,
+                 nearest: bool = False):
+        """``nearest``: a scene with more obstacles than the observation's slots is observed by the site's rule
+        (`np_sim.nearest`: the nearest ones, re-selected after every arc; every check stays on the whole scene)
+        instead of raising CapacityError."""
         if isinstance(scenes, Scene):
             scenes = [scenes]
         self.scenes = list(scenes)
@@ -97,8 +102,13 @@ class BatchCore:
         self.config = config
         self.arrays = pack_scenes(self.scenes)
         self.geo = self.arrays.geometry
+        selectors = [NearestObjects(s, config.observation) if nearest and exceeds_slots(s, config.observation)
+                     else None for s in self.scenes]
         # raises CapacityError naming the scene and the limit (never truncates)
-        self.static_obs = np.stack([static_slots(s, config.observation) for s in self.scenes])
+        self.static_obs = np.stack([static_slots(s, config.observation) if sel is None else sel.static_row()
+                                    for s, sel in zip(self.scenes, selectors)])
+        self.selectors = [(k, sel) for k, sel in enumerate(selectors) if sel is not None]
+        self.obstacle_columns = observation_sections(config.observation).get("obstacles")
         self.obs_size = observation_size(config.observation)
         self.P = kernel_parameters(config)
         self.local = config.vehicle.footprint_local()
@@ -151,6 +161,7 @@ class BatchCore:
         self.S[env_ids, K.S_SCENE] = scenes
         K.observe_batch(self.geo, self.arrays.targets, self.static_obs, self.S, self.P, self.b_ranges, self.off_c,
                         self.off_s, env_ids, self.obs)
+        self.observe_nearest(env_ids)
         self.observe_bev(env_ids)
 
     def step(self, actions: np.ndarray) -> None:
@@ -160,7 +171,17 @@ class BatchCore:
                      self.local, self.b_ranges, self.off_c, self.off_s, self.offsets, self.headings, self.scales0,
                      self.scales1, self.basis, self.dbasis, self.h_pts, self.h_kbar_max, self.h_dk, self.h_len,
                      self.h_cost, self.obs, self.R)
+        self.observe_nearest(self._all)
         self.observe_bev(self._all)
+
+    def observe_nearest(self, env_ids: np.ndarray) -> None:
+        """Obstacle slots of the envs ``env_ids`` whose scene exceeds the slots: the nearest obstacles to their
+        current poses (`np_sim.nearest`); other envs keep the scene's constant slots."""
+        for k, selector in self.selectors:
+            rows = np.asarray(env_ids)[self.S[env_ids, K.S_SCENE] == k]
+            if len(rows):
+                start, stop = self.obstacle_columns
+                self.obs[rows, start:stop] = selector.slots(self.S[rows, K.S_X: K.S_TH + 1])
 
     def observe_bev(self, env_ids: np.ndarray) -> None:
         """With ``use_bev``: the BEV latent of the envs ``env_ids`` at their current poses (ego-aligned raster, no

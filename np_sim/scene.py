@@ -10,7 +10,10 @@ A scene is stored in the world frame as one JSON object::
       "obstacles": [{"polygon": [[x, y], ...]},  # simple polygon, >= 3 distinct vertices; may cross the boundary
                     {"circle": [cx, cy, r]}],    # r > 0
       "target": [x, y, theta],                   # reference-point pose (rear-axle centre), radians
-      "start_region": [[x, y], ...]              # optional simple polygon inside the boundary; absent = whole lot
+      "start_region": [[x, y], ...],             # optional simple polygon inside the boundary; absent = whole lot
+                                                 # (or {"box": [xmin, ymin, xmax, ymax]}, stored as its polygon)
+      "start_headings": [lo, hi],                # optional heading range (rad) of drawn starts; absent = any
+      "starts": [[x, y, theta], ...]             # optional explicit start poses (reference point, radians)
     }
 
 Polygons (boundary, obstacle polygons, start region) describe a closed ring. Exact repeats are the same ring and
@@ -18,7 +21,11 @@ are dropped when a scene is built: a closing vertex equal to the first (the GeoJ
 equal vertices. Obstacles may cross or lie beyond the boundary (a real lot cut to a region of interest). The start
 region must lie inside the boundary (touching it is allowed) and must not be wholly covered by obstacles: some of
 its area must be free, with circles counted as their circumscribed 64-gon. Whether a whole footprint fits there is
-the benchmark validity check's question (`np_sim.benchmarks.validity`), not the format's.
+the benchmark validity check's question (`np_sim.benchmarks.validity`), not the format's. ``start_headings`` is
+``[lo, hi]`` with lo ≤ hi ≤ lo + 2π (a range may cross ±π, e.g. ``[2.5, 3.8]``). Each explicit start must have
+its reference point strictly inside the boundary; whether it is free under a planner's collision convention is
+checked where the starts are used (`np_sim.scene_starts`). The JSON Schema of the format is
+``np_sim/data/scene.schema.json``.
 
 Loading validates everything and fixes nothing else: every problem raises `SceneError` with the source (file path
 or ``"<dict>"``), the field path (``obstacles[3].polygon[2]``) and what was expected against what came; an
@@ -154,6 +161,10 @@ class Scene:
     """Free str -> str | int | float labels (benchmark, split, cell, ...)."""
     version: int = SCENE_FORMAT_VERSION
     """Scene format version; only `SCENE_FORMAT_VERSION` exists."""
+    start_headings: np.ndarray | None = None
+    """(2,) float64 heading range [lo, hi] (rad) of starts drawn from the start region, or None for any heading."""
+    starts: np.ndarray | None = None
+    """(n, 3) float64 explicit start poses x (m), y (m), θ (rad) of the reference point, or None."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "boundary", _frozen_ring(self.boundary, "Scene.boundary"))
@@ -164,6 +175,14 @@ class Scene:
         object.__setattr__(self, "target", target)
         if self.start_region is not None:
             object.__setattr__(self, "start_region", _frozen_ring(self.start_region, "Scene.start_region"))
+        for name, shape in (("start_headings", (2,)), ("starts", (-1, 3))):
+            value = getattr(self, name)
+            if value is not None:
+                array = np.array(value, dtype=np.float64)
+                if array.ndim != len(shape) or array.shape[-1] != shape[-1]:
+                    raise SceneError(f"Scene.{name}: expected shape {shape} (-1: any), got {array.shape}")
+                array.flags.writeable = False
+                object.__setattr__(self, name, array)
         obstacles = tuple(self.obstacles)
         for index, obstacle in enumerate(obstacles):
             if not isinstance(obstacle, (PolygonObstacle, CircleObstacle)):
@@ -219,6 +238,10 @@ class Scene:
         }
         if self.start_region is not None:
             out["start_region"] = self.start_region.tolist()
+        if self.start_headings is not None:
+            out["start_headings"] = self.start_headings.tolist()
+        if self.starts is not None:
+            out["starts"] = self.starts.tolist()
         return out
 
     @classmethod
@@ -279,6 +302,7 @@ class Scene:
                     raise SceneError(f"{source}: {where}[2]: expected a radius > 0, got {obstacle.radius!r}")
         if self.start_region is not None:
             self._check_start_region(boundary, _check_polygon(self.start_region, source, "start_region"), source)
+        self._check_starts(boundary, source)
         if capacity is not None:
             self.check_capacity(capacity, source=source)
         self._check_target(boundary, vehicle if vehicle is not None else VehicleSpec(), source)
@@ -321,6 +345,21 @@ class Scene:
                 f"{', '.join(covering)} (no start can be drawn there)"
             )
 
+    def _check_starts(self, boundary: ShapelyPolygon, source: str) -> None:
+        """SceneError unless ``start_headings`` is a range lo ≤ hi ≤ lo + 2π of finite numbers and every explicit
+        start is finite with its reference point strictly inside ``boundary``."""
+        if self.start_headings is not None:
+            lo, hi = self.start_headings
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi <= lo + 2.0 * math.pi):
+                raise SceneError(f"{source}: start_headings: expected [lo, hi] (rad) with lo <= hi <= lo + 2π, "
+                                 f"got {self.start_headings.tolist()}")
+        for index, pose in enumerate(() if self.starts is None else self.starts):
+            if not np.all(np.isfinite(pose)):
+                raise SceneError(f"{source}: starts[{index}]: expected finite numbers, got {pose.tolist()}")
+            if not boundary.contains_properly(Point(pose[0], pose[1])):
+                raise SceneError(f"{source}: starts[{index}]: the reference point ({pose[0]:g}, {pose[1]:g}) must "
+                                 "lie strictly inside the boundary")
+
     def check_capacity(self, capacity: SceneCapacity, *, source: str = "<scene>") -> None:
         """Raise `CapacityError` naming the limit and the count if the scene exceeds ``capacity`` (never truncates)."""
         if len(self.obstacles) > capacity.max_obstacles:
@@ -361,7 +400,8 @@ class Scene:
 
 # ---------------------------------------------------------------------- parsing helpers
 
-_TOP_LEVEL_KEYS = ("version", "name", "tags", "boundary", "obstacles", "target", "start_region")
+_TOP_LEVEL_KEYS = ("version", "name", "tags", "boundary", "obstacles", "target", "start_region", "start_headings",
+                   "starts")
 _REQUIRED_KEYS = ("boundary", "obstacles", "target")
 
 
@@ -481,8 +521,16 @@ def _parse_scene(data: Any, source: str) -> Scene:
         raise SceneError(f"{source}: obstacles: expected a list of obstacle objects, got {_describe(obstacles_data)}")
     obstacles = tuple(_parse_obstacle(item, source, f"obstacles[{i}]") for i, item in enumerate(obstacles_data))
     target = _numbers(data["target"], 3, source, "target", "an [x, y, theta] pose")
-    start_data = data.get("start_region")
-    start_region = None if start_data is None else _points(start_data, source, "start_region")
+    start_region = _parse_start_region(data.get("start_region"), source)
+    headings = data.get("start_headings")
+    if headings is not None:
+        headings = _numbers(headings, 2, source, "start_headings", "a [lo, hi] heading range (rad)")
+    starts = data.get("starts")
+    if starts is not None:
+        if not _is_sequence(starts):
+            raise SceneError(f"{source}: starts: expected a list of [x, y, theta] poses, got {_describe(starts)}")
+        starts = [_numbers(pose, 3, source, f"starts[{i}]", "an [x, y, theta] pose") for i, pose in enumerate(starts)]
+        starts = np.array(starts, dtype=np.float64).reshape(len(starts), 3)
     return Scene(
         boundary=boundary,
         obstacles=obstacles,
@@ -491,7 +539,24 @@ def _parse_scene(data: Any, source: str) -> Scene:
         name=name,
         tags=tags,
         version=version,
+        start_headings=headings,
+        starts=starts,
     )
+
+
+def _parse_start_region(value: Any, source: str) -> np.ndarray | None:
+    """The start region as (n, 2) points: a list of [x, y] points, or ``{"box": [xmin, ymin, xmax, ymax]}`` as its
+    counter-clockwise rectangle (xmin < xmax, ymin < ymax); None when absent."""
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        return _points(value, source, "start_region")
+    _check_keys(value, ("box",), ("box",), source, "start_region")
+    xmin, ymin, xmax, ymax = _numbers(value["box"], 4, source, "start_region.box", "[xmin, ymin, xmax, ymax]")
+    if not (xmin < xmax and ymin < ymax):
+        raise SceneError(f"{source}: start_region.box: expected xmin < xmax and ymin < ymax, got "
+                         f"{[xmin, ymin, xmax, ymax]}")
+    return np.array([[xmin, ymin], [xmax, ymin], [xmax, ymax], [xmin, ymax]])
 
 
 _LOCATION = re.compile(r"\[\s*([-+0-9.eE]+)\s+([-+0-9.eE]+)\s*\]")

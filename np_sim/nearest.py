@@ -1,0 +1,68 @@
+"""The site's rule for a scene with more obstacles than the observation has slots (spec §4, paper App. C).
+
+A recorded parking lot holds 60–120 parked cars near the route; the policy has ``max_obstacles`` slots (20 on the
+benchmarks, 10 at the site). Under this rule the policy's obstacle slots hold the ``max_obstacles`` obstacles
+nearest to the vehicle's current reference point (Euclidean distance to the observed polygon, 0 inside; ties by
+scene order), nearest first, re-selected after every arc from the pose it reached: the delivery site's clips keep
+the ten detections nearest the vehicle the same way (`np_sim.clips.Clip.frame_scene`). Everything else stays on
+the whole scene: the LiDAR (a range sensor, it sees every object within its range), the arc and connector
+collision checks of the rollout, and every validation of a plan. A scene within the slots is observed exactly as
+before (scene order, computed once), so its plans are unchanged. The polygon-vertex and boundary-segment limits
+are not relaxed: a scene beyond them is still a `CapacityError`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import shapely
+
+from np_sim.config import ObservationConfig
+from np_sim.frames import to_target_frame
+from np_sim.observation import boundary_slots
+from np_sim.scene import Scene
+
+
+def exceeds_slots(scene: Scene, config: ObservationConfig) -> bool:
+    """The observation encodes obstacles and ``scene`` has more of them than its ``max_obstacles`` slots."""
+    return config.use_obstacles and len(scene.obstacles) > config.max_obstacles
+
+
+class NearestObjects:
+    """The obstacle slots of an over-capacity scene as a function of the vehicle pose (module docstring)."""
+
+    def __init__(self, scene: Scene, config: ObservationConfig):
+        # every limit but the obstacle count still holds (CapacityError naming it otherwise)
+        scene.check_capacity(dataclasses.replace(config.capacity(), max_obstacles=len(scene.obstacles)),
+                             source=scene.name or "<scene>")
+        self.scene, self.config = scene, config
+        polygons = scene.polygons_for_observation()
+        vertices = config.vertices_per_obstacle
+        self._rows = np.stack([to_target_frame(p, scene.target)[np.arange(vertices) % len(p)].reshape(-1)
+                               for p in polygons])
+        self._shapes = shapely.polygons([np.asarray(p) for p in polygons])
+
+    def indices(self, poses) -> np.ndarray:
+        """(m, max_obstacles) scene indices of the obstacles each pose row (x, y[, θ]) observes, nearest first."""
+        xy = np.atleast_2d(np.asarray(poses, np.float64))[:, :2]
+        distance = shapely.distance(shapely.points(xy)[:, None], self._shapes[None, :])
+        return np.argsort(distance, axis=1, kind="stable")[:, : self.config.max_obstacles]
+
+    def slots(self, poses) -> np.ndarray:
+        """(m, max_obstacles · 2 · vertices) target-frame obstacle slots of each pose row (the observation's
+        obstacle part, `np_sim.observation.obstacle_slots` layout)."""
+        index = self.indices(poses)
+        return self._rows[index].reshape(len(index), -1)
+
+    def static_row(self) -> np.ndarray:
+        """The scene-constant tail of the flat observation with the obstacle slots at the sentinel (they are
+        written per pose by ``slots``) and the boundary slots as usual."""
+        parts = []
+        if self.config.use_obstacles:
+            parts.append(np.full(self.config.max_obstacles * 2 * self.config.vertices_per_obstacle,
+                                 self.config.sentinel))
+        if self.config.use_boundary:
+            bare = Scene(self.scene.boundary, (), self.scene.target, None, name=self.scene.name)
+            parts.append(boundary_slots(bare, self.config).reshape(-1))
+        return np.concatenate(parts) if parts else np.zeros(0)
