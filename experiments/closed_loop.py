@@ -3,7 +3,7 @@ Table ``tab:realworld``, App. C, Fig. ``fig:searchtime``; spec §8).
 
 ``python -m experiments.closed_loop --clips [--split eval|train-difficult] [--clips-limit N | --clip-names NAME ...]
 [--planners neuralparker neuralparker_footprint np_guided_astar hybrid_astar] [--checkpoint PATH] [--no-render]
-[--workers N] [--out DIR] [--set KEY=VALUE ...]``
+[--vehicle sedan|van|FILE] [--workers N] [--out DIR] [--set KEY=VALUE ...]``
 
 For every evaluation clip and planner, `tracking.clip_run.run_clip` starts the MuJoCo vehicle at the clip's start
 pose in the clip's ground truth (static objects, moving pedestrians and carts, the site boundary as walls), plans
@@ -16,7 +16,11 @@ paper-faithful reference-point training, the 'paper' preset), "NeuralParker (foo
 (``checkpoints/site_np_footprint.pt``, trained under the footprint convention, the 'footprint_anytime' preset: its
 mean rollout when that keeps 0.2 m of clearance, else the best of it and 32 seeded sampled rollouts, then wider
 rescue rounds, centred connector order; by default its row is left out with a note when the file is missing),
-NP-Guided A* and Hybrid A* (both searching under the footprint convention).
+NP-Guided A* and Hybrid A* (both searching under the footprint convention). ``--vehicle`` (`np_sim.vehicle`) is
+the vehicle planned for and driven (``planner.vehicle`` and ``clip_run.tracker.vehicle``, which must agree): the
+searches' footprint and κ_max, the validators, the MuJoCo vehicle; the shipped site checkpoints were trained for the
+default car and are refused for another vehicle, so with ``--vehicle van`` run ``--planners hybrid_astar`` or pass
+checkpoints trained for it.
 
 Every setting is a field of `ClosedLoopConfig`; the flags set the common ones and ``--set KEY=VALUE`` any other
 (`experiments.overrides`), e.g. ``--set clip_run.stitch=true clip_run.track_window=5``, ``--set
@@ -55,7 +59,7 @@ from tqdm import tqdm
 from experiments.common import first, git_commit, run_folder, write_records
 from experiments.overrides import apply_overrides
 from experiments.registry import PlannerOptions, build_planners, check_names, label
-from np_sim.cli import cli_boundary, fresh_folder, positive_int
+from np_sim.cli import cli_boundary, fresh_folder, positive_int, vehicle_spec
 from np_sim.errors import ConfigError
 from np_sim.plan import PLAN_STAGES
 from tracking.clip_run import ClipRunConfig
@@ -115,6 +119,17 @@ class ClosedLoopConfig:
         if self.controller not in CONTROLLERS:
             raise ConfigError(f"ClosedLoopConfig.controller: expected one of {sorted(CONTROLLERS)}, got "
                               f"{self.controller!r}")
+        if self.planner.vehicle != self.clip_run.tracker.vehicle:
+            raise ConfigError(f"ClosedLoopConfig: planner.vehicle {self.planner.vehicle.describe()} is not "
+                              f"clip_run.tracker.vehicle {self.clip_run.tracker.vehicle.describe()}; the vehicle "
+                              "planned for must be the one driven (--vehicle sets both)")
+
+
+def for_vehicle(config: ClosedLoopConfig, vehicle) -> ClosedLoopConfig:
+    """``config`` planning for and driving ``vehicle`` (a `np_sim.vehicle.VehicleSpec`)."""
+    tracker = dataclasses.replace(config.clip_run.tracker, vehicle=vehicle)
+    return dataclasses.replace(config, planner=dataclasses.replace(config.planner, vehicle=vehicle),
+                               clip_run=dataclasses.replace(config.clip_run, tracker=tracker))
 
 
 def planner_names(config: ClosedLoopConfig) -> tuple[list[str], list[str]]:
@@ -129,18 +144,22 @@ def planner_names(config: ClosedLoopConfig) -> tuple[list[str], list[str]]:
 
 
 def clip_rows(clip, planners: dict[str, Any], controller: str, rrd_dir: Path | None, render: bool,
-              config=None) -> list[dict]:
-    """Run one clip with every planner (``config``: a `tracking.clip_run.ClipRunConfig`, default its defaults);
-    one record row per planner."""
+              config=None, disturbance=None) -> list[dict]:
+    """Run one clip with every planner (``config``: a `tracking.clip_run.ClipRunConfig`, default its defaults;
+    ``disturbance``: None or a `tracking.disturbance.Disturbance`, its physical factors applied to
+    ``config.tracker``); one record row per planner."""
     from tracking.clip_run import clip_mujoco_world, clip_world, object_of_geom, run_clip
 
     config = ClipRunConfig() if config is None else config
+    if disturbance is not None:
+        config = dataclasses.replace(config, tracker=disturbance.tracker(config.tracker))
     ground = clip_world(clip)
     world = clip_mujoco_world(clip, config.tracker, ground)  # compiled once, reset by each run
     rows = []
     for name, planner in planners.items():
         rrd = None if rrd_dir is None else rrd_path(rrd_dir, clip.name, name)
-        run = run_clip(clip, planner, controller, config=config, rerun_path=rrd, render=render, world=world)
+        run = run_clip(clip, planner, controller, config=config, rerun_path=rrd, render=render, world=world,
+                       disturbance=disturbance)
         rec, first = run.record, run.first_plan
         times = np.array([c.plan_time_s for c in run.calls]) * 1e3
         L, rev, _ = first.metrics() if first.success else (math.nan, -1, math.nan)
@@ -435,6 +454,9 @@ def main(argv=None) -> dict[str, Any]:
                         help=f"paper-faithful site NeuralParker checkpoint of neuralparker and np_guided_astar "
                              f"(default {SITE_PLANNERS.checkpoint})")
     parser.add_argument("--no-render", action="store_true", help="no off-screen camera frames in the .rrd")
+    parser.add_argument("--vehicle", type=vehicle_spec, default=None,
+                        help="vehicle planned for and driven: a preset (sedan, the default; van) or a vehicle JSON "
+                             "file (docs/vehicles.md); the site checkpoints are the sedan's")
     parser.add_argument("--workers", type=positive_int, default=None,
                         help=f"parallel processes (default one per core: {default_workers()} here)")
     parser.add_argument("--out", type=fresh_folder, default=None,
@@ -448,6 +470,8 @@ def main(argv=None) -> dict[str, Any]:
                               clip_names=tuple(args.clip_names), workers=args.workers,
                               render_clips=0 if args.no_render else ClosedLoopConfig.render_clips,
                               planner=dataclasses.replace(SITE_PLANNERS, checkpoint=args.checkpoint))
+    if args.vehicle is not None:
+        config = for_vehicle(config, args.vehicle)
     result = run(apply_overrides(config, args.overrides), args.out)
     folder = result["folder"]
     print(result["table"])

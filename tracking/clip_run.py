@@ -56,7 +56,7 @@ from tracking.config import ExecutorConfig, TrackerConfig, WorldConfig
 from tracking.executor import execute, parked, plan_problem
 from tracking.movers import Mover, poses_at
 from tracking.observer import Observers, RunObserver, TrajectoryRecorder
-from tracking.perception import perceived_scene
+from tracking.perception import perceived_scene, tracked_detections
 from tracking.record import Contact, ExecutionRecord
 from tracking.stitching import StitchedPlan, stitch_distance
 from tracking.validators import validate_plan
@@ -282,11 +282,17 @@ class ReplanningLoop:
     State: ``calls`` (every planner call), ``followed`` (the plan the tracker follows and the vehicle's progress
     along it, None before the first usable plan), ``retry_at_s`` (no planner call before this sim time: set after a
     failed call) and ``previous_pose`` (the pose of the last replan decision, telling a standing vehicle).
-    ``log``: None or the run's `tracking.clip_log.ClipRerunObserver`, given the detections of every call."""
+    ``log``: None or the run's `tracking.clip_log.ClipRerunObserver`, given the detections of every call.
+    ``disturbance``: None or a `tracking.disturbance.Disturbance`, whose perception factors perturb each frame's
+    detections; ``hooks``: None or its `tracking.disturbance.RunHooks` of this run, whose localisation error is
+    added to the pose the planner gets (the standing test keeps the true displacement: wheel odometry)."""
 
-    def __init__(self, clip: Clip, planner, config: ClipRunConfig, log=None):
+    def __init__(self, clip: Clip, planner, config: ClipRunConfig, log=None, disturbance=None, hooks=None):
         self.clip, self.planner, self.config, self.log = clip, planner, config, log
         self.tracker = config.tracker
+        self.hooks = hooks
+        perceives = disturbance is not None and disturbance.value and disturbance.factor.startswith("detection_")
+        self.disturbance = disturbance if perceives else None
         if not isinstance(planner, Planner):
             raise TypeError(f"run_clip: expected a planner (np_sim.planners.Planner: plan, convention and name), got "
                             f"{type(planner).__name__}")
@@ -308,7 +314,18 @@ class ReplanningLoop:
         """The clip frame of sim time ``t`` (⌊t / frame period⌉, clamped to the last frame) and its detections
         around ``pose``."""
         frame = min(int(round(t / self.clip.frame_dt_s)), self.clip.n_frames - 1)
-        return frame, perceived_scene(self.clip, frame, pose=pose, track_window=self.config.track_window)
+        if self.disturbance is None:
+            return frame, perceived_scene(self.clip, frame, pose=pose, track_window=self.config.track_window)
+        ids, polygons = tracked_detections(self.clip, frame, self.config.track_window)
+        target = shapely.Polygon(self.tracker.vehicle.footprint(self.clip.target))
+        # seeded by the frame whose detections are held: a held detection keeps its perturbation
+        ids, polygons = self.disturbance.perceive(self.clip.name, self.clip.detection_frame(frame), ids, polygons,
+                                                  keep_clear=target)
+        return frame, self.clip.frame_scene(frame, pose=pose, detections=(ids, polygons))
+
+    def sensed(self, pose: np.ndarray, t: float) -> np.ndarray:
+        """The pose the vehicle believes it has at sim time ``t`` (``pose`` without a localisation error)."""
+        return pose if self.hooks is None else self.hooks.sensed(pose, t)
 
     def call(self, pose: np.ndarray, t: float, frame: int, scene: Scene, prefix: tuple | None = None) -> Plan:
         """Call the planner from ``pose``; a usable plan becomes the followed one, after the stretch ``prefix`` =
@@ -334,11 +351,13 @@ class ReplanningLoop:
         """(plan of the call at t = 0, plan to drive, sim time it was planned at): the vehicle waits at its start,
         calling again every ``retry_period_s`` until a plan is usable or ``first_plan_wait_s`` has passed."""
         start = np.asarray(self.clip.start, float)
-        first = self.call(start, 0.0, *self.frame_scene(0.0, start))
+        believed = self.sensed(start, 0.0)
+        first = self.call(believed, 0.0, *self.frame_scene(0.0, believed))
         driven, t0 = first, 0.0
         while not self.last_usable and t0 + self.config.retry_period_s <= self.config.first_plan_wait_s + 1e-9:
             t0 += self.config.retry_period_s
-            driven = self.call(start, t0, *self.frame_scene(t0, start))
+            believed = self.sensed(start, t0)
+            driven = self.call(believed, t0, *self.frame_scene(t0, believed))
         return first, driven, t0
 
     def replan(self, pose: np.ndarray, t: float) -> Plan | None:
@@ -348,6 +367,7 @@ class ReplanningLoop:
         period_s = self.tracker.executor.replan_period_s
         standing = moved < self.tracker.executor.rest_speed_mps * period_s
         self.previous_pose = np.array(pose, float)
+        pose = self.sensed(pose, t)
         if parked(pose, self.clip.target, self.tracker.executor):
             return None  # a parked vehicle starts no new manoeuvre
         if t < self.retry_at_s - 1e-9:
@@ -380,7 +400,8 @@ class ReplanningLoop:
 
 
 def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunConfig | None = None,
-             rerun_path: str | Path | None = None, render: bool = False, world: World | None = None) -> ClipRun:
+             rerun_path: str | Path | None = None, render: bool = False, world: World | None = None,
+             disturbance=None) -> ClipRun:
     """Drive ``clip`` in closed loop with ``planner`` replanning once per frame (module docstring).
 
     Parameters
@@ -402,10 +423,15 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
     world
         The clip's MuJoCo world from `clip_mujoco_world` with ``config.tracker``, to reuse across runs of the clip
         (each run resets it to the start); default: built here.
+    disturbance
+        None or a `tracking.disturbance.Disturbance`: its perception, localisation and actuation factors act
+        here, seeded by the clip's name; its physical factors act through ``config.tracker``, which the caller
+        gives as ``disturbance.tracker(...)`` (`experiments.closed_loop.clip_rows` does).
     """
     config = ClipRunConfig() if config is None else config
     tracker = config.tracker
-    loop = ReplanningLoop(clip, planner, config)
+    hooks = None if disturbance is None else disturbance.hooks(clip.name, tracker)
+    loop = ReplanningLoop(clip, planner, config, disturbance=disturbance, hooks=hooks)
     ground = clip_world(clip)
     start = np.asarray(clip.start, float)
     world = clip_mujoco_world(clip, tracker, ground) if world is None else world
@@ -423,9 +449,10 @@ def run_clip(clip: Clip, planner, controller: str = "lqr", *, config: ClipRunCon
     if t0 > 0.0:
         recorder.start_time_s = t0
     record = execute(ground.scene, driven, controller, replan=loop.replan, config=tracker,
-                     observer=Observers(parts), world=world, start_time_s=t0 if loop.last_usable else 0.0)
+                     observer=Observers(parts), world=world, start_time_s=t0 if loop.last_usable else 0.0,
+                     hooks=hooks, vehicle_start=None if hooks is None else start)
     waiting = np.arange(0.0, t0, tracker.executor.control_dt_s) if loop.last_usable else np.zeros(0)
-    record = _with_waiting_contacts(record, ground, start, waiting, tracker.vehicle)
+    record = _with_waiting_contacts(record, ground, start, waiting, tracker.plant.body(tracker.vehicle))
     if loop.log is not None and record.reason in ("plan_failed", "empty_plan", "steering_limit",
                                                   "start_in_collision"):
         loop.log.finish_unrun(record)  # the executor returned before the loop started: no hooks were called

@@ -6,7 +6,9 @@ configs hold only what the spec does not: masses, wheels, actuators, rates, gain
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+
+from dataclasses import dataclass, field, replace
 
 from np_sim.config import config_from_dict
 from np_sim.vehicle import VehicleSpec
@@ -63,6 +65,33 @@ class VehicleModelConfig:
     """Chase camera height above the wheel centres (m)."""
     chase_pitch_deg: float = 25.0
     """Chase camera pitch below the horizon (deg)."""
+
+
+@dataclass(frozen=True)
+class PlantConfig:
+    """How the simulated vehicle differs from the one planned and tracked for (`tracking.disturbance`): a payload
+    and a longer body exist only in the MuJoCo model; the planners, the controllers' feed-forward mass and the
+    footprint checks keep `VehicleSpec` and the nominal masses. The defaults are no difference."""
+
+    payload_kg: float = 0.0
+    """A point mass carried on the vehicle's centre line at the centre-of-mass height (kg)."""
+    payload_x_m: float = 0.0
+    """Where the payload sits, ahead of the reference point (m; 0 = over the rear axle)."""
+    extra_length_m: float = 0.0
+    """The chassis box is this much longer than ``VehicleSpec.length_m``, half at each end, without added mass
+    (a tow bar, a bike rack); its contacts are the run's body contacts (m)."""
+
+    def __post_init__(self) -> None:
+        if not (self.payload_kg >= 0 and self.extra_length_m >= 0 and math.isfinite(self.payload_x_m)):
+            raise ValueError(f"PlantConfig: expected payload_kg >= 0, extra_length_m >= 0 and a finite payload_x_m, "
+                             f"got {self.payload_kg!r}, {self.extra_length_m!r}, {self.payload_x_m!r}")
+
+    def body(self, spec: VehicleSpec) -> VehicleSpec:
+        """The simulated body's footprint: ``spec`` with each overhang ``extra_length_m / 2`` longer."""
+        if not self.extra_length_m:
+            return spec
+        half = 0.5 * self.extra_length_m
+        return replace(spec, front_overhang_m=spec.front_overhang_m + half, rear_overhang_m=spec.rear_overhang_m + half)
 
 
 @dataclass(frozen=True)
@@ -218,6 +247,8 @@ class TrackerConfig:
     """Speed controller."""
     executor: ExecutorConfig = field(default_factory=ExecutorConfig)
     """Closed-loop run settings."""
+    plant: PlantConfig = field(default_factory=PlantConfig)
+    """The simulated vehicle's differences from ``vehicle`` and ``model`` (default none)."""
 
     @classmethod
     def from_dict(cls, data) -> "TrackerConfig":

@@ -64,9 +64,10 @@ def _check_plan(plan: Plan, segments: list[Segment], config: TrackerConfig) -> t
 class _Loop:
     """State of one closed-loop run (kept in one object so the step stays a flat sequence of cheap calls)."""
 
-    def __init__(self, world: World, controller: str, config: TrackerConfig, observer: RunObserver):
+    def __init__(self, world: World, controller: str, config: TrackerConfig, observer: RunObserver, hooks=None):
         ec, mc = config.executor, config.model
         self.world, self.config, self.observer = world, config, observer
+        self.hooks = hooks
         self.lateral = make_lateral(controller, config)
         self.dt = ec.control_dt_s
         self.substeps = max(1, round(ec.control_dt_s / mc.timestep_s))
@@ -106,6 +107,11 @@ class _Loop:
             self.replans_failed += 1
         return False
 
+    def sensed_pose(self) -> np.ndarray:
+        """The reference-point pose the vehicle believes it has now (the true one without a disturbance)."""
+        truth = self.world.pose()
+        return truth if self.hooks is None else self.hooks.sensed(truth, self.t)
+
     def hold(self) -> None:
         """Stand at the end of the finished plan (projected on its last segment) until `follow` is called."""
         self.k, self.holding = len(self.segments) - 1, True
@@ -113,8 +119,9 @@ class _Loop:
     def step(self) -> bool:
         """One control step and its physics substeps; False once the last segment has ended."""
         world, ec, a_max = self.world, self.config.executor, self.config.profile.accel_mps2
-        pose = world.pose()
-        speed = world.speed(pose[2])
+        truth = world.pose()
+        speed = world.speed(truth[2])
+        pose = truth if self.hooks is None else self.hooks.sensed(truth, self.t)
         seg = self.segments[self.k]
         proj = project(seg, pose, self.hint)
         self.hint = proj.index
@@ -144,12 +151,13 @@ class _Loop:
             self.heading_sq += proj.heading_rad ** 2
             self.lateral_max = max(self.lateral_max, abs(proj.lateral_m))
             self.n_err += 1
-        world.apply(command, self.speed_ctl.wheel_torque(target, accel, speed, world.effective_mass(steer_now)))
+        torque = self.speed_ctl.wheel_torque(target, accel, speed, world.effective_mass(steer_now))
+        world.apply(*((command, torque) if self.hooks is None else self.hooks.actuate(command, torque)))
         if world.movers:
             world.move_objects(self.t)
         mujoco.mj_step(world.model, world.data, nstep=self.substeps)
         self.t += self.substeps * world.model.opt.timestep
-        self._account(pose, speed)
+        self._account(truth, speed)
         self.observer.on_step(self.t, world, state, command, target)
         return True
 
@@ -195,7 +203,8 @@ def plan_problem(plan: Plan, config: TrackerConfig) -> tuple[str, str]:
 def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = False,
             rerun_path: str | Path | None = None, *, replan: Replanner | None = None,
             config: TrackerConfig | None = None, observer: RunObserver | None = None,
-            world: World | None = None, start_time_s: float = 0.0) -> ExecutionRecord:
+            world: World | None = None, start_time_s: float = 0.0, hooks=None,
+            vehicle_start=None) -> ExecutionRecord:
     """Drive ``plan`` on the MuJoCo vehicle in ``scene`` from ``plan.start`` (see the module docstring).
 
     Parameters
@@ -223,6 +232,13 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
     start_time_s
         Sim time at which the run starts (moving objects are at their pose of that time; replanning mode's
         ``max_time_s`` stays an absolute time): a vehicle that waited at its start for a first plan.
+    hooks
+        A disturbance's run-time side (`tracking.disturbance.RunHooks`): ``sensed(pose, t)`` is the pose the
+        controller and the end-of-plan decisions see (a localisation error), ``actuate(curvature, torque)`` what
+        reaches the steering servos and drive motors (latency, a slower steering actuator); the ``replan`` hook
+        still gets the true pose (its caller applies the same localisation error). None: the ideal vehicle.
+    vehicle_start
+        Where the vehicle really starts when that is not ``plan.start`` (a plan made from a mislocalised start).
 
     Returns
     -------
@@ -230,9 +246,10 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
         Bad plans and starts give a record with a failure reason; bad arguments raise `TrackingError`.
     """
     config = _resolved_config(plan, config, world)
-    start = np.asarray(plan.start, dtype=float)
+    start = np.asarray(plan.start if vehicle_start is None else vehicle_start, dtype=float)
     if start.shape != (3,) or not np.all(np.isfinite(start)):
-        raise TrackingError(f"execute: plan.start must be a finite [x, y, θ], got {plan.start!r}")
+        raise TrackingError(f"execute: the start (vehicle_start, else plan.start) must be a finite [x, y, θ], got "
+                            f"{start.tolist()!r}")
     segments = _segments(plan, config) if plan.success else []
     reason, detail = _refusal(scene, plan, start, segments, config)
     if reason:
@@ -243,7 +260,7 @@ def execute(scene: Scene, plan: Plan, controller: str = "lqr", render: bool = Fa
     else:
         world.set_pose(start)
     observers = _observers(world, config, render, rerun_path, observer)
-    loop = _Loop(world, controller, config, observers)
+    loop = _Loop(world, controller, config, observers, hooks)
     loop.t = float(start_time_s)
     loop.follow(segments, moving=False)
     observers.on_start(world, plan, segments)
@@ -293,7 +310,7 @@ def _drive(loop: _Loop, target: np.ndarray, replan: Replanner | None, t_max: flo
             if loop.adopt(replan(world.pose(), loop.t)):
                 hold_until = math.inf
         if not loop.step():
-            if replan is None or parked(world.pose(), target, ec):
+            if replan is None or parked(loop.sensed_pose(), target, ec):
                 return ""
             loop.hold()
             hold_until = loop.t + ec.hold_max_s

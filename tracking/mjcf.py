@@ -14,7 +14,7 @@ import numpy as np
 
 from np_sim.cli import cli_boundary
 from np_sim.vehicle import VehicleSpec
-from tracking.config import VehicleModelConfig
+from tracking.config import PlantConfig, VehicleModelConfig
 from tracking.errors import TrackingError
 
 TEMPLATE_PATH = Path(__file__).resolve().parents[1] / "models" / "mjcf" / "vehicle_template.xml"
@@ -65,8 +65,30 @@ def _box_inertia(mass: float, length: float, width: float, height: float) -> dic
             "chassis_izz": mass * (length**2 + width**2) / 12}
 
 
-def template_values(spec: VehicleSpec, model: VehicleModelConfig) -> dict[str, float]:
-    """Every placeholder of the template, derived from the spec (geometry) and the model config (physics)."""
+def _payload_values(spec: VehicleSpec, model: VehicleModelConfig, plant: PlantConfig) -> dict[str, float]:
+    """Chassis mass, centre-of-mass x and inertia with ``plant``'s payload: the uniform box of the nominal
+    footprint plus a point mass m_p at x_p on the centre line at the centre-of-mass height, so that
+    M = m_c + m_p, x_c = (m_c·x_b + m_p·x_p)/M and, by the parallel-axis theorem, I_yy and I_zz gain
+    m_c·(x_b − x_c)² + m_p·(x_p − x_c)² (I_xx is unchanged)."""
+    box_x = 0.5 * (spec.front_m - spec.rear_overhang_m)
+    values = {"chassis_mass_kg": model.chassis_mass_kg, "com_x_m": box_x,
+              **_box_inertia(model.chassis_mass_kg, spec.length_m, spec.width_m,
+                             model.body_height_m - model.ground_clearance_m)}
+    if plant.payload_kg:
+        mass = model.chassis_mass_kg + plant.payload_kg
+        com = (model.chassis_mass_kg * box_x + plant.payload_kg * plant.payload_x_m) / mass
+        shift = model.chassis_mass_kg * (box_x - com) ** 2 + plant.payload_kg * (plant.payload_x_m - com) ** 2
+        values.update(chassis_mass_kg=mass, com_x_m=com, chassis_iyy=values["chassis_iyy"] + shift,
+                      chassis_izz=values["chassis_izz"] + shift)
+    return values
+
+
+def template_values(spec: VehicleSpec, model: VehicleModelConfig,
+                    plant: PlantConfig | None = None) -> dict[str, float]:
+    """Every placeholder of the template, derived from the spec (geometry), the model config (physics) and the
+    plant's differences (``plant``, default none: a payload, a longer chassis box)."""
+    plant = PlantConfig() if plant is None else plant
+    body = plant.body(spec)
     if not model.body_height_m > model.ground_clearance_m >= 0:
         raise TrackingError(f"VehicleModelConfig: expected body_height_m > ground_clearance_m >= 0, got "
                             f"{model.body_height_m} and {model.ground_clearance_m}")
@@ -91,15 +113,13 @@ def template_values(spec: VehicleSpec, model: VehicleModelConfig) -> dict[str, f
         "steer_kp": model.steer_kp,
         "steer_kv": model.steer_kv,
         "drive_torque_max_nm": model.drive_torque_max_nm,
-        "chassis_cx_m": 0.5 * (spec.front_m - spec.rear_overhang_m),
+        "chassis_cx_m": 0.5 * (body.front_m - body.rear_overhang_m),
         "chassis_cz_m": 0.5 * (model.ground_clearance_m + model.body_height_m) - r,
-        "chassis_half_length_m": 0.5 * spec.length_m,
+        "chassis_half_length_m": 0.5 * body.length_m,
         "chassis_half_width_m": 0.5 * spec.width_m,
         "chassis_half_height_m": 0.5 * (model.body_height_m - model.ground_clearance_m),
-        "chassis_mass_kg": model.chassis_mass_kg,
         "com_z_m": model.com_height_m - r,
-        **_box_inertia(model.chassis_mass_kg, spec.length_m, spec.width_m,
-                       model.body_height_m - model.ground_clearance_m),
+        **_payload_values(spec, model, plant),
         "wheelbase_m": spec.wheelbase_m,
         "half_track_m": half_track_m(spec, model),
         "chase_back_m": -model.chase_back_m,
@@ -109,13 +129,15 @@ def template_values(spec: VehicleSpec, model: VehicleModelConfig) -> dict[str, f
     }
 
 
-def vehicle_xml(spec: VehicleSpec | None = None, model: VehicleModelConfig | None = None) -> str:
-    """The vehicle MJCF text for ``spec`` and ``model`` (defaults: the HOPE rectangle, default physics)."""
+def vehicle_xml(spec: VehicleSpec | None = None, model: VehicleModelConfig | None = None,
+                plant: PlantConfig | None = None) -> str:
+    """The vehicle MJCF text for ``spec``, ``model`` and ``plant`` (defaults: the HOPE rectangle, default
+    physics, no plant difference)."""
     spec = VehicleSpec() if spec is None else spec
     model = VehicleModelConfig() if model is None else model
     if not TEMPLATE_PATH.is_file():
         raise TrackingError(f"vehicle MJCF template not found at {TEMPLATE_PATH}; run from a checkout of the repo")
-    values = {key: repr(float(value)) for key, value in template_values(spec, model).items()}
+    values = {key: repr(float(value)) for key, value in template_values(spec, model, plant).items()}
     return Template(TEMPLATE_PATH.read_text()).substitute(values)
 
 

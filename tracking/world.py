@@ -130,7 +130,8 @@ class World:
     half_track_m: float
     """Lateral offset of the wheel centres (m), for the Ackermann angles."""
     mass_kg: float
-    """Total vehicle mass m (kg)."""
+    """Total vehicle mass m (kg), of the nominal vehicle when ``config.plant`` carries a payload (the masses the
+    controllers assume)."""
     com_ahead_m: float
     """Distance a of the vehicle's centre of mass ahead of the reference point (m)."""
     yaw_inertia_kgm2: float
@@ -247,7 +248,7 @@ def build_world(scene: Scene, start, config: TrackerConfig | None = None, movers
     """Compile ``scene`` and ``movers`` with the vehicle of ``config`` at rest at ``start`` (reference-point pose)."""
     config = TrackerConfig() if config is None else config
     movers = tuple(movers)
-    assets = {"vehicle.xml": vehicle_xml(config.vehicle, config.model).encode()}
+    assets = {"vehicle.xml": vehicle_xml(config.vehicle, config.model, config.plant).encode()}
     model = mujoco.MjModel.from_xml_string(scene_xml(scene, config, movers), assets=assets)
     data = mujoco.MjData(model)
     names = {}
@@ -255,7 +256,11 @@ def build_world(scene: Scene, start, config: TrackerConfig | None = None, movers
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or ""
         if name.startswith(_TOUCHABLE):
             names[g] = name
-    mass, com_ahead, yaw_inertia = _mass_properties(model, data)
+    if config.plant.payload_kg:  # the controllers' feed-forward keeps the nominal vehicle's masses
+        nominal = mujoco.MjModel.from_xml_string(vehicle_xml(config.vehicle, config.model))
+        mass, com_ahead, yaw_inertia = _mass_properties(nominal, mujoco.MjData(nominal))
+    else:
+        mass, com_ahead, yaw_inertia = _mass_properties(model, data)
     world = World(model=model, data=data, scene=scene, config=config,
                   chassis_geom=mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "chassis"), geom_names=names,
                   half_track_m=half_track_m(config.vehicle, config.model), mass_kg=mass, com_ahead_m=com_ahead,
