@@ -2,7 +2,8 @@
 ``tab:twostage``, §V-F).
 
 ``python -m experiments.planners --benchmark factorial|topology [--checkpoint PATH] [--methods ...]
-[--convention reference_point|footprint] [--vehicle sedan|van|FILE] [--limit N] [--out DIR]``
+[--convention reference_point|footprint] [--vehicle sedan|van|FILE] [--limit N] [--out DIR]
+[--scenes FILE... [--starts N] [--seed S]]``
 
 Methods: Hybrid A*, NP-Guided A* (Hybrid A* guided by one NeuralParker rollout), the OMPL peer (RRT* in a
 Reeds–Shepp space, same time budget as Hybrid A*), NeuralParker (the checkpoint's deterministic policy) and the
@@ -18,6 +19,10 @@ checkpoint's convention). ``--vehicle`` plans for another vehicle (`np_sim.vehic
 were drawn for the default car, so each record says whether the vehicle's footprint at its start is free
 (``start_footprint_free``) and the table counts those that are not. Writes ``records.csv``/``records.json`` (one
 row per episode and method), ``table.md`` and ``config.json`` into the run folder.
+
+``--scenes FILE...`` plans your own scene files instead (`experiments.scene_files`): each file's explicit starts,
+or ``--starts N`` drawn from its start region with ``--seed S``; records add the file and the start pose, and
+config.json how many drawn starts were rejected in collision.
 """
 
 from __future__ import annotations
@@ -32,7 +37,8 @@ from tqdm import tqdm
 
 from experiments.common import first, git_commit, run_folder, write_records
 from experiments.registry import PlannerOptions, build_planners, check_names, label
-from np_sim.benchmarks import frozen_starts, load_benchmark
+from experiments.scene_files import (add_scene_arguments, describe, episode_scenes, load_scene_files, scene_columns,
+                                     starts_summary, strictest)
 from np_sim.cli import cli_boundary, fresh_folder, non_negative_int, positive_int, vehicle_spec
 from np_sim.collision import path_valid
 from np_sim.planners import HybridAStar
@@ -49,26 +55,30 @@ DEFAULT_CHECKPOINT = Path("checkpoints/factorial_np_seed0.pt")
 def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | None = DEFAULT_CHECKPOINT,
         convention: str = "reference_point", out: Path | None = None, limit: int | None = None, ompl_seed: int = 0,
         progress: bool = True, hope_checkpoint: Path | None = None,
-        vehicle: VehicleSpec | None = None) -> dict[str, Any]:
+        vehicle: VehicleSpec | None = None, scenes: list[Path] | None = None, n_starts: int | None = None,
+        seed: int = 0) -> dict[str, Any]:
     """Plan every frozen start with every method for ``vehicle`` (default the sedan); returns the records, the
-    table text and the run folder."""
+    table text and the run folder. With ``scenes`` (files), their starts instead (`experiments.scene_files`:
+    the files' own, or ``n_starts`` drawn with ``seed``)."""
     methods = check_names(DEFAULT_METHODS if methods is None else methods, METHODS)
     vehicle = VehicleSpec() if vehicle is None else vehicle
-    options = PlannerOptions(checkpoint=checkpoint, convention=convention, ompl_seed=ompl_seed, benchmark=benchmark,
-                             hope_checkpoint=hope_checkpoint, vehicle=vehicle)
+    options = PlannerOptions(checkpoint=checkpoint, convention=convention, ompl_seed=ompl_seed,
+                             benchmark=None if scenes else benchmark, hope_checkpoint=hope_checkpoint, vehicle=vehicle)
     planners = build_planners(methods, options)
-    scenes = load_benchmark(benchmark, "test")
-    starts = frozen_starts(benchmark)
-    episodes = first([(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])], limit)
+    files = (load_scene_files(scenes, n_starts, seed, strictest(p.convention for p in planners.values()), vehicle)
+             if scenes else None)
+    scenes, starts = episode_scenes(benchmark, files)
+    episodes = first([(k, j) for k in range(len(scenes)) for j in range(len(starts[k]))], limit)
     folder = run_folder("planners", out)
     records: list[dict[str, Any]] = []
-    for k, j in tqdm(episodes, desc=f"planners/{benchmark}", unit="ep", disable=not progress):
-        free = int(path_valid(scenes[k], starts[k, j][None], "footprint", vehicle))
+    for k, j in tqdm(episodes, desc=f"planners/{'scenes' if files else benchmark}", unit="ep", disable=not progress):
+        free = int(path_valid(scenes[k], starts[k][j][None], "footprint", vehicle))
         for method in methods:
-            plan = planners[method].plan(scenes[k], starts[k, j])
+            plan = planners[method].plan(scenes[k], starts[k][j])
             L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))
             scored = planners[method].convention
-            records.append({"scene": scenes[k].name, "start_id": j, "method": method, "seed": ompl_seed,
+            records.append({"scene": scenes[k].name, "start_id": j, **scene_columns(files, k, j), "method": method,
+                            "seed": ompl_seed,
                             "convention": scored, "success": int(plan.success), "reason": plan.reason, "L": L,
                             "reversals": rev, "delta_kappa": dk, "plan_time_ms": 1e3 * plan.plan_time_s,
                             "expanded_nodes": plan.expanded_nodes,
@@ -82,13 +92,14 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
     write_records(folder, records)
     (folder / "table.md").write_text(table + "\n")
     (folder / "config.json").write_text(json.dumps({
-        "benchmark": benchmark, "methods": methods, "checkpoint": None if checkpoint is None else str(checkpoint),
+        "benchmark": None if files else benchmark, "scenes": describe(files), "starts_seed": seed,
+        "methods": methods, "checkpoint": None if checkpoint is None else str(checkpoint),
         "convention": convention, "vehicle": vehicle.to_dict(), "episodes": len(episodes), "ompl_seed": ompl_seed,
         "neuralparker": options.neuralparker.to_dict(),
         "hybrid_astar": {k: v for k, v in vars(planners.get("hybrid_astar", HybridAStar()).config).items()
                          if k != "vehicle"},
         "git_commit": git_commit()}, indent=2, default=str))
-    return {"records": records, "table": table, "folder": folder}
+    return {"records": records, "table": table, "folder": folder, "starts": starts_summary(files)}
 
 
 def format_table(records: list[dict[str, Any]], methods: list[str]) -> str:
@@ -150,9 +161,13 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--out", type=fresh_folder,
                         help="new or empty run folder (default: a fresh results/planners/<timestamp>)")
     parser.add_argument("--limit", type=positive_int, help="only the first N frozen episodes (smoke runs)")
+    add_scene_arguments(parser)
     args = parser.parse_args(argv)
     result = run(args.benchmark, args.methods, args.checkpoint, args.convention, args.out, args.limit, args.ompl_seed,
-                 hope_checkpoint=args.hope_checkpoint, vehicle=args.vehicle)
+                 hope_checkpoint=args.hope_checkpoint, vehicle=args.vehicle, scenes=args.scenes,
+                 n_starts=args.starts, seed=args.seed)
+    if result["starts"]:
+        print(result["starts"])
     print(result["table"])
     print(f"records: {result['folder'] / 'records.csv'}")
     return result

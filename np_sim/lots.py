@@ -113,8 +113,8 @@ def generate_lot(config: LotConfig = LotConfig(), seed: int = 0, vehicle: Vehicl
     region = [[centre - half_l, aisle - half_w], [centre + half_l, aisle - half_w],
               [centre + half_l, aisle + half_w], [centre - half_l, aisle + half_w]]
     towards = 0.0 if direction < 0 else math.pi
-    scene = Scene(boundary=np.array([[0.0, 0.0], [width, 0.0], [width, height], [0.0, height]]),
-                  obstacles=tuple(obstacles), target=target, start_region=np.array(region),
+    scene = Scene(boundary=np.round([[0.0, 0.0], [width, 0.0], [width, height], [0.0, height]], 3),
+                  obstacles=tuple(obstacles), target=np.round(target, 6), start_region=np.round(region, 3),
                   name=name or f"lot_seed{seed}",
                   tags={"source": "np_sim.lots.generate_lot", "seed": int(seed)},
                   start_headings=np.array([towards - config.start_heading_rad, towards + config.start_heading_rad]))
