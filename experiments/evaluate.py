@@ -1,7 +1,8 @@
 """Evaluate NeuralParker checkpoints on a benchmark's frozen test starts (paper §III-A protocol, Table I style).
 
 ``python -m experiments.evaluate --benchmark factorial --checkpoints a.pt [b.pt c.pt] [--preset paper]
-[--connector fixed|ensemble|centred] [--samples N | --action sample [--action-seed S]] [--out DIR]``
+[--connector fixed|ensemble|centred] [--samples N | --action sample [--action-seed S]] [--vehicle sedan|van|FILE]
+[--out DIR]``
 
 Each checkpoint is one training seed. Every frozen start (1,080 Factorial, 720 Topology-Stress) is planned with
 the checkpoint's environment rules and the NeuralParker preset ``--preset`` (`np_policy.config.PRESETS`; default
@@ -14,8 +15,10 @@ instead of the mean, as a Tianshou policy acts at test time by default; ``--acti
 the full set, beside it the exact validity of the planned paths (`np_sim.validate`: the footprint, and the
 reference point, swept continuously; a failure counts as invalid); path length L, reversals and Δκ (eq:metrics)
 on the common-success cohort — here the episodes every
-evaluated seed solved — reported as the mean ± sample SD over seeds; plan time as median and 90th percentile. Writes
-``records.csv`` and ``records.json`` (one row per episode), ``table.md`` and ``config.json`` into the run folder.
+evaluated seed solved — reported as the mean ± sample SD over seeds; plan time as median and 90th percentile.
+``--vehicle`` (`np_sim.vehicle`, default the sedan) is the vehicle planned for: a checkpoint trained for another
+one is refused with both named, and the exact footprint validity uses its footprint. Writes ``records.csv`` and
+``records.json`` (one row per episode), ``table.md`` and ``config.json`` into the run folder.
 """
 
 from __future__ import annotations
@@ -33,9 +36,10 @@ from experiments.common import first, git_commit, mean_sd, run_folder, write_rec
 from np_policy.config import ACTIONS, PAPER, PRESETS, NeuralParkerConfig
 from np_policy.planner import NeuralParkerPlanner
 from np_sim.benchmarks import frozen_starts, load_benchmark
-from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int
+from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int, vehicle_spec
 from np_sim.config import CONNECTOR_VARIANTS
 from np_sim.validate import plan_valid
+from np_sim.vehicle import VehicleSpec
 
 
 def method_name(config: NeuralParkerConfig) -> str:
@@ -48,9 +52,11 @@ def method_name(config: NeuralParkerConfig) -> str:
 
 
 def evaluate(benchmark: str, checkpoints: list[Path], config: NeuralParkerConfig = PAPER, out: Path | None = None,
-             limit: int | None = None, progress: bool = True) -> dict[str, Any]:
-    """Plan every frozen start with every checkpoint, playing each as ``config`` says (the 'paper' preset: the
-    mean action); returns the records and the table text."""
+             limit: int | None = None, progress: bool = True, vehicle: VehicleSpec | None = None) -> dict[str, Any]:
+    """Plan every frozen start with every checkpoint for ``vehicle`` (default the sedan; a checkpoint trained for
+    another is refused), playing each as ``config`` says (the 'paper' preset: the mean action); returns the records
+    and the table text."""
+    vehicle = VehicleSpec() if vehicle is None else vehicle
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
     episodes = first([(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])], limit)
@@ -58,7 +64,7 @@ def evaluate(benchmark: str, checkpoints: list[Path], config: NeuralParkerConfig
     records: list[dict[str, Any]] = []
     method = method_name(config)
     for seed_index, path in enumerate(checkpoints):
-        planner = NeuralParkerPlanner.from_checkpoint(path, config, benchmark=benchmark)
+        planner = NeuralParkerPlanner.from_checkpoint(path, config, benchmark=benchmark, vehicle=vehicle)
         for k, j in tqdm(episodes, desc=f"{Path(path).name}", unit="ep", disable=not progress):
             plan = planner.plan(scenes[k], starts[k, j])
             L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))
@@ -67,14 +73,16 @@ def evaluate(benchmark: str, checkpoints: list[Path], config: NeuralParkerConfig
                             "checkpoint": str(path), "seed": planner.policy.train.seed, "seed_index": seed_index,
                             "success": int(plan.success), "reason": plan.reason, "L": L, "reversals": rev,
                             "delta_kappa": dk, "plan_time_ms": 1e3 * plan.plan_time_s,
-                            "exact_footprint_valid": int(plan_valid(scenes[k], plan, "exact", "footprint")),
-                            "exact_ref_point_valid": int(plan_valid(scenes[k], plan, "exact", "reference_point"))})
+                            "exact_footprint_valid": int(plan_valid(scenes[k], plan, "exact", "footprint", vehicle)),
+                            "exact_ref_point_valid": int(plan_valid(scenes[k], plan, "exact", "reference_point",
+                                                                    vehicle))})
     table = format_table(records, len(checkpoints))
     write_records(folder, records)
     (folder / "table.md").write_text(table + "\n")
     (folder / "config.json").write_text(json.dumps({"benchmark": benchmark,
                                                     "checkpoints": [str(p) for p in checkpoints],
-                                                    "neuralparker": config.to_dict(), "episodes": len(episodes),
+                                                    "neuralparker": config.to_dict(), "vehicle": vehicle.to_dict(),
+                                                    "episodes": len(episodes),
                                                     "git_commit": git_commit()}, indent=2))
     return {"records": records, "table": table, "folder": folder}
 
@@ -121,13 +129,16 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--action-seed", type=non_negative_int, default=None, metavar="S",
                         help="noise seed of --action sample (with the start pose) and of --samples' rollouts "
                              "(paper preset: 0)")
+    parser.add_argument("--vehicle", type=vehicle_spec, default=VehicleSpec(),
+                        help="vehicle planned for: a preset (sedan, the default; van) or a vehicle JSON file "
+                             "(docs/vehicles.md); the checkpoints must have been trained for it")
     parser.add_argument("--out", type=fresh_folder,
                         help="new or empty run folder (default: a fresh results/evaluate/<timestamp>)")
     parser.add_argument("--limit", type=positive_int, help="only the first N frozen episodes (smoke runs)")
     args = parser.parse_args(argv)
     fields = {"connector": args.connector, "samples": args.samples, "action": args.action, "seed": args.action_seed}
     config = dataclasses.replace(PRESETS[args.preset], **{k: v for k, v in fields.items() if v is not None})
-    result = evaluate(args.benchmark, args.checkpoints, config, args.out, args.limit)
+    result = evaluate(args.benchmark, args.checkpoints, config, args.out, args.limit, vehicle=args.vehicle)
     print(result["table"])
     print(f"records: {result['folder'] / 'records.csv'}")
     return result

@@ -1,6 +1,7 @@
 """Train the NeuralParker arc policy with PPO (paper §III-E, Algorithm 1, App. A Table V).
 
-``python -m np_policy.train --benchmark factorial --seed 0 [--config FILE] [--epochs N] [--out DIR] [--resume]``
+``python -m np_policy.train --benchmark factorial --seed 0 [--config FILE] [--vehicle sedan|van|FILE] [--epochs N]
+[--out DIR] [--resume]``
 
 One run reads top to bottom: build the batched env on the training scenes with the geodesic start curriculum
 and the in-loop Hermite ensemble, then per epoch collect 16,384 transitions at a time from the 128 training envs
@@ -13,7 +14,10 @@ a line to ``metrics.jsonl`` (statistics, and its wall-clock split into ``collect
 and at the last epoch of a run stopped early with ``--epochs``) holds everything needed to resume exactly — on CPU
 a resumed run gives the same curve as an uninterrupted one. A run whose last metrics row is epoch ``ppo.epochs`` is
 finished: its snapshot (optimiser and env state, about three times the size of ``best.pt``) is removed, and
-``--resume`` on it says it is finished.
+``--resume`` on it says it is finished. ``--vehicle`` trains for another vehicle (`np_sim.vehicle`): the env's
+footprint checks, LiDAR footprint ranges, start sampling and action bound κ_max follow it, and the connector's
+curvature bound is its κ_max unless the ``--config`` file sets ``env.connector.kappa_max``; the checkpoint stores
+it, and planners for another vehicle refuse the checkpoint.
 """
 
 from __future__ import annotations
@@ -40,6 +44,7 @@ from np_policy.ppo import RunningMeanStd, compute_targets, make_optimizer, ppo_u
 from np_sim.curriculum import CurriculumSchedule, CurriculumStartSampler
 from np_sim.env import ParkingVectorEnv
 from np_sim.clips import cached_training_pool, difficult_clips
+from np_sim.cli import vehicle_spec
 from np_sim.errors import ConfigError, NPSimError
 from np_sim.scene import Scene
 from np_sim.starts import UniformStartSampler, fixed_start_sampler
@@ -548,6 +553,19 @@ def _read_overrides(path: Path | None) -> dict[str, Any]:
     return overrides
 
 
+def with_vehicle(data: dict[str, Any], vehicle) -> dict[str, Any]:
+    """TrainConfig fields ``data`` for ``vehicle`` (a `np_sim.vehicle.VehicleSpec`): ``env.vehicle`` and, unless
+    ``data`` sets it, the connector's curvature bound ``env.connector.kappa_max`` = its κ_max; ConfigError when
+    ``data`` names a vehicle too."""
+    env = data.get("env", {})
+    if not isinstance(env, dict) or not isinstance(env.get("connector", {}), dict):
+        return data  # not a mapping: TrainConfig.from_dict names the field
+    if "vehicle" in env:
+        raise ConfigError("--vehicle and the --config file's env.vehicle both name a vehicle; give one of them")
+    connector = {"kappa_max": vehicle.kappa_max, **env.get("connector", {})}
+    return {**data, "env": {**env, "vehicle": dataclasses.asdict(vehicle), "connector": connector}}
+
+
 def main(argv=None) -> list[dict[str, Any]]:
     """Command line of ``train``; a user's mistake is one ``error:`` line on stderr and exit status 2."""
     parser = argparse.ArgumentParser(prog="python -m np_policy.train", description=__doc__,
@@ -557,6 +575,8 @@ def main(argv=None) -> list[dict[str, Any]]:
     parser.add_argument("--seed", type=int, default=0, help="training seed")
     parser.add_argument("--config", type=Path, help="JSON file with TrainConfig fields overriding the defaults "
                         "(nested: env, ppo, network, curriculum); unknown keys and wrong types are errors")
+    parser.add_argument("--vehicle", type=vehicle_spec, help="vehicle to train for: a preset (sedan, the default; "
+                        "van) or a vehicle JSON file (docs/vehicles.md)")
     parser.add_argument("--epochs", type=int, help="stop after this epoch, 1..ppo.epochs (default: ppo.epochs); "
                         "the LR schedule and curriculum still follow ppo.epochs")
     parser.add_argument("--out", type=Path, help="run folder (default: results/train/<benchmark>_seed<N>); a folder "
@@ -574,7 +594,7 @@ def main(argv=None) -> list[dict[str, Any]]:
     data = merge_config(benchmark_defaults(args.benchmark), _read_overrides(args.config))
     data.update(benchmark=args.benchmark, seed=args.seed)
     try:
-        config = TrainConfig.from_dict(data)
+        config = TrainConfig.from_dict(data if args.vehicle is None else with_vehicle(data, args.vehicle))
         out = args.out or Path("results/train") / f"{config.benchmark}_seed{config.seed}"
         rows = train(config, out, epochs=args.epochs, resume=args.resume, init=args.init, overwrite=args.overwrite,
                      tensorboard=args.tensorboard)
