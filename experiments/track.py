@@ -2,7 +2,7 @@
 
 ``python -m experiments.track --benchmark factorial --planner hybrid_astar [--convention footprint]
 [--vehicle sedan|van|FILE] [--per-scene K] [--limit N] [--controller lqr|stanley|pure_pursuit|all]
-[--rrd-episodes N] [--no-render] [--out DIR]``
+[--rrd-episodes N] [--no-render] [--out DIR] [--scenes FILE... [--starts N] [--seed S]]``
 
 Every frozen start of the benchmark's test scenes (1,080 Factorial, 720 Topology-Stress; ``--per-scene K`` keeps
 the first K of the 40 starts of every scene, ``--limit`` then the first N episodes in scene order) is planned
@@ -17,6 +17,10 @@ for, validated and driven: the planner's footprint and κ_max, the validators' f
 built from it (`tracking.mjcf`); a start where its footprint is not free (the frozen starts were drawn for the
 default car) is executed as 'start_in_collision'. Writes ``records.csv``/``records.json`` (one row per episode and
 controller), ``table.md``, ``config.json`` and the first ``--rrd-episodes`` runs as ``.rrd`` files.
+
+``--scenes FILE...`` tracks plans on your own scene files instead (`experiments.scene_files`): each file's explicit
+starts, or ``--starts N`` drawn from its start region with ``--seed S`` and free under the planner's convention;
+records add the file and the start pose, and config.json how many drawn starts were rejected in collision.
 """
 
 from __future__ import annotations
@@ -33,7 +37,8 @@ from tqdm import tqdm
 
 from experiments.common import first, git_commit, run_folder, write_records
 from experiments.registry import PlannerOptions, build_planners, check_names
-from np_sim.benchmarks import frozen_starts, load_benchmark
+from experiments.scene_files import (add_scene_arguments, describe, episode_scenes, load_scene_files, scene_columns,
+                                     starts_summary)
 from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int, vehicle_spec
 from np_sim.errors import ConfigError
 from np_sim.vehicle import VehicleSpec
@@ -50,28 +55,32 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
           convention: str = "footprint", checkpoint: Path | None = None, limit: int | None = None,
           per_scene: int | None = None,
           out: Path | None = None, rrd_episodes: int = 0, render: bool = True,
-          progress: bool = True, vehicle: VehicleSpec | None = None) -> dict[str, Any]:
+          progress: bool = True, vehicle: VehicleSpec | None = None, scenes: list[Path] | None = None,
+          n_starts: int | None = None, seed: int = 0) -> dict[str, Any]:
     """Plan, validate and execute the frozen starts for ``vehicle`` (default the sedan); returns the records, the
-    table and the run folder."""
+    table and the run folder. With ``scenes`` (files), their starts instead (`experiments.scene_files`: the files'
+    own, or ``n_starts`` drawn with ``seed``)."""
     for c in controllers:
         if c not in CONTROLLERS:
             raise ConfigError(f"--controller: expected one of {sorted(CONTROLLERS)} or 'all', got {c!r}")
-    scenes = load_benchmark(benchmark, "test")
-    starts = frozen_starts(benchmark)
     vehicle = VehicleSpec() if vehicle is None else vehicle
     tracker = dataclasses.replace(TrackerConfig(), vehicle=vehicle)
-    options = PlannerOptions(checkpoint=checkpoint, convention=convention, benchmark=benchmark, vehicle=vehicle)
+    options = PlannerOptions(checkpoint=checkpoint, convention=convention, benchmark=None if scenes else benchmark,
+                             vehicle=vehicle)
     source = build_planners(check_names([planner], PLANNERS), options)[planner]
-    per_scene = len(first(range(starts.shape[1]), per_scene, "--per-scene"))
-    episodes = first([(k, j) for k in range(len(scenes)) for j in range(per_scene)], limit)
+    files = load_scene_files(scenes, n_starts, seed, source.convention, vehicle) if scenes else None
+    scenes, starts = episode_scenes(benchmark, files)
+    episodes = first([(k, j) for k in range(len(scenes))
+                      for j in first(range(len(starts[k])), per_scene, "--per-scene")], limit)
     folder = run_folder("track", out)
     records: list[dict[str, Any]] = []
     for n, (k, j) in enumerate(tqdm(episodes, desc=f"{planner} → MuJoCo", unit="ep", disable=not progress)):
         scene = scenes[k]
-        plan = source.plan(scene, starts[k, j])
+        plan = source.plan(scene, starts[k][j])
         valid = validate_plan(scene, plan, vehicle)
         L, rev, _ = plan.metrics() if plan.success else (math.nan, -1, math.nan)
-        base = {"scene": scene.name, "start_id": j, "planner": planner, "convention": convention,
+        base = {"scene": scene.name, "start_id": j, **scene_columns(files, k, j), "planner": planner,
+                "convention": convention,
                 "plan_success": int(plan.success), "plan_reason": plan.reason, "plan_time_ms": 1e3 * plan.plan_time_s,
                 "L": L, "plan_reversals": rev, "ref_point_valid": int(valid["reference_point"]),
                 "footprint_valid": int(valid["footprint"]),
@@ -86,12 +95,13 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
     write_records(folder, records)
     (folder / "table.md").write_text(table + "\n")
     (folder / "config.json").write_text(json.dumps(
-        {"benchmark": benchmark, "planner": planner, "convention": convention, "vehicle": vehicle.to_dict(),
+        {"benchmark": None if files else benchmark, "scenes": describe(files), "starts_seed": seed,
+         "planner": planner, "convention": convention, "vehicle": vehicle.to_dict(),
          "checkpoint": str(checkpoint),
          "controllers": list(controllers), "episodes": len(episodes), "per_scene": per_scene, "limit": limit,
          "rrd_episodes": rrd_episodes,
          "render": render, "git_commit": git_commit()}, indent=2))
-    return {"records": records, "table": table, "folder": folder}
+    return {"records": records, "table": table, "folder": folder, "starts": starts_summary(files)}
 
 
 def _mean(values) -> float:
@@ -149,10 +159,14 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--no-render", action="store_true", help="no off-screen frames in the .rrd files")
     parser.add_argument("--out", type=fresh_folder, default=None,
                         help="new or empty run folder (default: a fresh results/track/<timestamp>)")
+    add_scene_arguments(parser)
     args = parser.parse_args(argv)
     controllers = tuple(CONTROLLERS) if args.controller == "all" else (args.controller,)
     result = track(args.benchmark, args.planner, controllers, args.convention, args.checkpoint, args.limit,
-                   args.per_scene, args.out, args.rrd_episodes, not args.no_render, vehicle=args.vehicle)
+                   args.per_scene, args.out, args.rrd_episodes, not args.no_render, vehicle=args.vehicle,
+                   scenes=args.scenes, n_starts=args.starts, seed=args.seed)
+    if result["starts"]:
+        print(result["starts"])
     print(result["table"])
     print(f"results in {result['folder']}")
     return result
