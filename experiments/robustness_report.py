@@ -1,0 +1,99 @@
+"""The outputs of the robustness study (`experiments.robustness`): rates with binomial confidence bands, the
+success-vs-level plots and ``table.md``."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from experiments.registry import label
+from tracking.disturbance import FACTORS, LEVELS
+
+Z95 = 1.959963984540054
+"""Standard normal quantile of a two-sided 95 % interval."""
+
+
+def wilson(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion (Wilson 1927): centre (k + z²/2)/(n + z²), half-width
+    z·√(k(n − k)/n + z²/4)/(n + z²); (nan, nan) for n = 0."""
+    if n == 0:
+        return math.nan, math.nan
+    centre = (successes + 0.5 * z * z) / (n + z * z)
+    half = z * math.sqrt(successes * (n - successes) / n + 0.25 * z * z) / (n + z * z)
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def rates(rows: list[dict], factor: str, planner: str, column: str) -> list[tuple[int, int]]:
+    """(count of ``column`` true, runs) at the levels 'none', then ``LEVELS``, of ``factor`` for ``planner``: the
+    undisturbed rows are shared by every factor."""
+    out = []
+    for level in ("none", *LEVELS):
+        name = "none" if level == "none" else factor
+        hits = [int(r[column]) > 0 for r in rows if r["factor"] == name and r["level"] == level
+                and r["planner"] == planner]
+        out.append((sum(hits), len(hits)))
+    return out
+
+
+def level_labels(factor: str) -> list[str]:
+    """Tick labels of the levels: the level and its physical setting."""
+    spec = FACTORS[factor]
+    return ["none"] + [f"{lv}\n{spec.setting(v)}" for lv, v in zip(LEVELS, spec.levels)]
+
+
+def factor_figure(rows: list[dict], factor: str, planners: list[str], path: Path) -> Path:
+    """Footprint success and contact rate against the level of ``factor``, one line per planner, 95 % Wilson
+    bands."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 3.6), sharex=True)
+    x = np.arange(1 + len(LEVELS))
+    for ax, column, title in zip(axes, ("footprint_success", "contacts"), ("footprint success", "contact rate")):
+        for planner in planners:
+            counts = rates(rows, factor, planner, column)
+            kept = [(i, k, n) for i, (k, n) in enumerate(counts) if n]
+            if not kept:
+                continue
+            xs = np.array([i for i, _, _ in kept])
+            band = np.array([wilson(k, n) for _, k, n in kept])
+            line, = ax.plot(xs, [k / n for _, k, n in kept], "o-", ms=4, label=label(planner))
+            ax.fill_between(xs, band[:, 0], band[:, 1], color=line.get_color(), alpha=0.15)
+        ax.set_title(f"{factor}: {title}", fontsize=9)
+        ax.set_ylim(-0.02, 1.02)
+        ax.set_xticks(x, level_labels(factor), fontsize=7)
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path
+
+
+def _cell(counts: tuple[int, int], contacts: tuple[int, int]) -> str:
+    (k, n), (c, _) = counts, contacts
+    if not n:
+        return "–"
+    lo, hi = wilson(k, n)
+    return f"{k / n:.2f} [{lo:.2f}, {hi:.2f}] / {c / n:.2f}"
+
+
+def format_table(rows: list[dict], factors: list[str], planners: list[str]) -> str:
+    """Markdown: per factor, per planner, footprint success [95 % Wilson interval] / contact rate at every level."""
+    clips = len({r["clip"] for r in rows})
+    lines = [f"Closed-loop robustness on {clips} clip(s): footprint success [95 % Wilson interval] / contact rate "
+             f"(runs with a chassis contact), one factor at a time.", ""]
+    for factor in factors:
+        spec = FACTORS[factor]
+        heads = " | ".join(f"{lv} ({spec.setting(v)})" for lv, v in zip(LEVELS, spec.levels))
+        lines += [f"### {factor} ({spec.group})", "", f"| Planner | none | {heads} |", "|---|---|---|---|---|"]
+        for planner in planners:
+            success = rates(rows, factor, planner, "footprint_success")
+            contact = rates(rows, factor, planner, "contacts")
+            lines.append(f"| {label(planner)} | " + " | ".join(_cell(s, c) for s, c in zip(success, contact)) + " |")
+        lines.append("")
+    return "\n".join(lines)
