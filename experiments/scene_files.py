@@ -24,7 +24,8 @@ from typing import Any
 import numpy as np
 
 from np_sim.benchmarks import frozen_starts, load_benchmark
-from np_sim.cli import existing_file, non_negative_int, positive_int
+import np_sim.examples
+from np_sim.cli import non_negative_int, positive_int
 from np_sim.config import Convention
 from np_sim.errors import ConfigError
 from np_sim.scene import Scene
@@ -105,11 +106,30 @@ def starts_summary(files: list[SceneFile] | None) -> str:
     return "\n".join(lines)
 
 
+EXAMPLES = Path(np_sim.examples.__file__).parent
+"""Folder of the shipped example scenes (``*.json`` and ``lots/*.json``)."""
+
+
+def scene_file(text: str) -> Path:
+    """Argument type: an existing scene file, or the name of a shipped example scene (``own_lot``,
+    ``reverse_bay`` …, looked up in ``np_sim/examples`` and its ``lots`` folder)."""
+    path = Path(text)
+    if path.is_file():
+        return path
+    shipped = {p.stem: p for p in sorted([*EXAMPLES.glob("*.json"), *EXAMPLES.glob("lots/*.json")])}
+    if text in shipped and not path.exists():
+        return shipped[text]
+    if path.exists():
+        raise argparse.ArgumentTypeError(f"expected a scene file, got the folder {text}")
+    raise argparse.ArgumentTypeError(f"no such file: {text} (nor a shipped example scene: {', '.join(shipped)})")
+
+
 def add_scene_arguments(parser: argparse.ArgumentParser) -> None:
     """``--scenes FILE...``, ``--starts N`` and ``--seed S`` (module docstring)."""
-    parser.add_argument("--scenes", nargs="+", type=existing_file, metavar="FILE",
-                        help="your own scene JSON files instead of the benchmark (np_sim/data/scene.schema.json); "
-                             "starts from each file, or --starts N drawn from its start region")
+    parser.add_argument("--scenes", nargs="+", type=scene_file, metavar="FILE",
+                        help="your own scene JSON files instead of the benchmark (np_sim/data/scene.schema.json) "
+                             "or names of shipped example scenes (own_lot); starts from each file, or --starts N "
+                             "drawn from its start region")
     parser.add_argument("--starts", type=positive_int, metavar="N",
                         help="with --scenes: starts drawn from the start region of each file that lists none")
     parser.add_argument("--seed", type=non_negative_int, default=0,

@@ -31,8 +31,8 @@ from matplotlib.figure import Figure
 
 from experiments.common import git_commit, run_folder, write_records
 from experiments.registry import REGISTRY, PlannerOptions, build_planners, check_names, label
-from experiments.scene_files import strictest
-from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, vehicle_spec
+from experiments.scene_files import scene_file, strictest
+from np_sim.cli import cli_boundary, fresh_folder, non_negative_int, vehicle_spec
 from np_sim.collision import path_valid
 from np_sim.errors import CapacityError, ConfigError, SceneError, StartInCollisionError
 from np_sim.plan import Plan
@@ -179,7 +179,8 @@ def main(argv=None) -> dict[str, Any]:
     """Command-line entry point (usage in the module docstring; a user's mistake exits 2 with one error line)."""
     parser = argparse.ArgumentParser(prog="python -m experiments.scene_run", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("scene", type=existing_file, help="scene JSON file")
+    parser.add_argument("scene", type=scene_file,
+                        help="scene JSON file, or the name of a shipped example scene (own_lot, reverse_bay, ...)")
     parser.add_argument("--start", type=float, nargs=3, metavar=("X", "Y", "THETA"),
                         help="start pose: reference point (m) and heading (rad)")
     parser.add_argument("--planners", nargs="+", choices=list(REGISTRY),
