@@ -1,6 +1,7 @@
 """The vehicle MJCF, filled from `VehicleSpec` and `VehicleModelConfig` (spec §3, §8), and its Ackermann geometry.
 
-``python -m tracking.mjcf [-o FILE]`` writes the default vehicle as a loadable MJCF (for the MuJoCo viewer).
+``python -m tracking.mjcf [--vehicle sedan|van|FILE] [-o FILE]`` writes a vehicle (default the sedan,
+`np_sim.vehicle`) as a loadable MJCF (for the MuJoCo viewer).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from string import Template
 
 import numpy as np
 
-from np_sim.cli import cli_boundary
+from np_sim.cli import cli_boundary, vehicle_spec
 from np_sim.vehicle import VehicleSpec
 from tracking.config import PlantConfig, VehicleModelConfig
 from tracking.errors import TrackingError
@@ -143,11 +144,14 @@ def vehicle_xml(spec: VehicleSpec | None = None, model: VehicleModelConfig | Non
 
 @cli_boundary
 def main(argv=None) -> Path:
-    """Write the default vehicle MJCF to a file (an unwritable path prints one ``error:`` line, exit status 2)."""
+    """Write a vehicle's MJCF to a file (an unwritable path or a bad vehicle prints one ``error:`` line, exit
+    status 2)."""
     parser = argparse.ArgumentParser(prog="python -m tracking.mjcf", description=__doc__)
+    parser.add_argument("--vehicle", type=vehicle_spec, default=VehicleSpec(),
+                        help="a preset (sedan, the default; van) or a vehicle JSON file (docs/vehicles.md)")
     parser.add_argument("-o", "--out", type=Path, default=Path("vehicle.xml"), help="output MJCF file")
     args = parser.parse_args(argv)
-    args.out.write_text(vehicle_xml())
+    args.out.write_text(vehicle_xml(args.vehicle))
     print(f"wrote {args.out}")
     return args.out
 
