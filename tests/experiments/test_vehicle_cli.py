@@ -87,3 +87,16 @@ def test_train_for_the_van_stores_it_and_its_curvature_bound(tmp_path):
     assert train.TrainConfig.from_dict(explicit).env.connector.kappa_max == 0.2
     with pytest.raises(ConfigError, match="--vehicle and the --config file's env.vehicle both name a vehicle"):
         train.with_vehicle({"env": {"vehicle": {"width_m": 2.0}}}, van)
+
+
+def test_an_adapted_hope_checkpoint_for_the_sedan_is_refused_for_the_van(tmp_path):
+    from hope_policy.ppo import HopePPOConfig
+    from hope_policy.train import HopeTrainConfig
+    from hope_policy.train import train as train_hope
+
+    config = HopeTrainConfig(num_envs=2, episodes=1, ppo=HopePPOConfig(batch_size=16, minibatch_size=8, epochs=1))
+    train_hope(config, tmp_path, progress=False)
+    with pytest.raises(CheckpointError, match=r"final.pt: trained for the vehicle 'sedan' .* refused for the "
+                                              r"vehicle 'van'"):
+        build_planners(["hope"], PlannerOptions(hope_checkpoint=tmp_path / "final.pt", vehicle=load_vehicle("van")))
+    assert build_planners(["hope"], PlannerOptions(hope_checkpoint=tmp_path / "final.pt"))["hope"].name == "hope"
