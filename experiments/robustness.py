@@ -278,7 +278,21 @@ def _settings(args, argv: list[str]) -> tuple[argparse.Namespace, list[str]]:
     saved = json.loads(stored.read_text())["argv"]
     again = _parser().parse_args(saved)
     again.workers, again.ray_address, again.no_rrd = args.workers, args.ray_address, args.no_rrd
+    again.resume, again.dry_run = args.resume, args.dry_run
     return again, saved
+
+
+def _study_argv(argv: list[str]) -> list[str]:
+    """``argv`` without the options that do not define the study (its folder, workers, cluster, recordings)."""
+    out, skip = [], False
+    for a in argv:
+        if skip:
+            skip = False
+        elif a in ("--out", "--workers", "--ray-address"):
+            skip = True
+        elif a != "--no-rrd" and not a.startswith(("--out=", "--workers=", "--ray-address=")):
+            out.append(a)
+    return out
 
 
 def study_config(args) -> ClosedLoopConfig:
@@ -311,7 +325,7 @@ def main(argv=None) -> dict[str, Any]:
     if folder is None:
         folder = run_folder("robustness", args.out)
         log = RecordLog(folder / "records.csv")
-        stored = [a for a in argv if a != "--dry-run"]
+        stored = _study_argv(argv)
         (folder / "config.json").write_text(json.dumps(
             {"argv": stored, "config": dataclasses.asdict(loop), "planners": names, "factors": args.factors,
              "levels": args.levels, "seed": args.seed, "clips": [clips[k].name for k in indices],

@@ -22,7 +22,8 @@ def wilson(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
         return math.nan, math.nan
     centre = (successes + 0.5 * z * z) / (n + z * z)
     half = z * math.sqrt(successes * (n - successes) / n + 0.25 * z * z) / (n + z * z)
-    return max(0.0, centre - half), min(1.0, centre + half)
+    # at k = 0 (k = n) the lower (upper) bound is exactly 0 (1); rounding would leave it a hair off
+    return (0.0 if successes == 0 else centre - half), (1.0 if successes == n else centre + half)
 
 
 def rates(rows: list[dict], factor: str, planner: str, column: str) -> list[tuple[int, int]]:

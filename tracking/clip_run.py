@@ -316,11 +316,12 @@ class ReplanningLoop:
         frame = min(int(round(t / self.clip.frame_dt_s)), self.clip.n_frames - 1)
         if self.disturbance is None:
             return frame, perceived_scene(self.clip, frame, pose=pose, track_window=self.config.track_window)
-        ids, polygons = tracked_detections(self.clip, frame, self.config.track_window)
+        held = self.clip.detection_frame(frame)
+        window = self.config.track_window
+        ids, polygons = self.clip.detections(held) if window == 1 else tracked_detections(self.clip, frame, window)
         target = shapely.Polygon(self.tracker.vehicle.footprint(self.clip.target))
         # seeded by the frame whose detections are held: a held detection keeps its perturbation
-        ids, polygons = self.disturbance.perceive(self.clip.name, self.clip.detection_frame(frame), ids, polygons,
-                                                  keep_clear=target)
+        ids, polygons = self.disturbance.perceive(self.clip.name, held, ids, polygons, keep_clear=target)
         return frame, self.clip.frame_scene(frame, pose=pose, detections=(ids, polygons))
 
     def sensed(self, pose: np.ndarray, t: float) -> np.ndarray:

@@ -147,14 +147,16 @@ class Disturbance:
                  keep_clear=None) -> tuple[np.ndarray, np.ndarray]:
         """The detections (ids (n,), polygons (n, k, 2)) of ``frame`` as the disturbed perception reports them:
         each shifted by N(0, σ²) per axis (``detection_noise``) or dropped with probability p
-        (``detection_drop``); unchanged for the other factors. The draws are seeded by (seed, ``run_key``,
-        ``frame``), one per detection in the given order, so a frame's noise does not depend on call order. A
-        shifted detection that would overlap ``keep_clear`` (a shapely geometry, the target footprint: a scene
+        (``detection_drop``); unchanged for the other factors. Each detection's draws are seeded by (seed,
+        ``run_key``, ``frame``, its object id), so they depend neither on the call order nor on the detections'
+        order. A shifted detection that would overlap ``keep_clear`` (a shapely geometry, the target footprint: a scene
         must keep its target free) keeps its recorded place."""
         if not self.value or self.factor not in ("detection_noise", "detection_drop"):
             return ids, polygons
-        rng = np.random.default_rng([self.seed, _key(run_key), int(frame)])
-        shift, draw = rng.normal(0.0, 1.0, (len(ids), 2)), rng.random(len(ids))
+        shift, draw = np.zeros((len(ids), 2)), np.zeros(len(ids))
+        for j, object_id in enumerate(ids):
+            rng = np.random.default_rng([self.seed, _key(run_key), int(frame), int(object_id)])
+            shift[j], draw[j] = rng.normal(0.0, 1.0, 2), rng.random()
         if self.factor == "detection_drop":
             kept = draw >= self.value
             return ids[kept], polygons[kept]

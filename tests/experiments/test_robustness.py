@@ -1,0 +1,108 @@
+"""experiments.robustness: the study's runs, resumption after a kill, the outputs and the confidence bands."""
+
+import csv
+import json
+
+import pytest
+
+from experiments.robustness import RecordLog, main, study_jobs
+from experiments.robustness_report import format_table, rates, wilson
+from np_sim.clips import load_clips
+
+CLIP = "eval-1000016"
+"""A short clip Hybrid A* parks in closed loop."""
+
+
+@pytest.mark.parametrize("k,n,low,high", [(8, 10, 0.4902, 0.9433), (0, 10, 0.0, 0.2775), (10, 10, 0.7225, 1.0),
+                                          (47, 94, 0.4009, 0.5991)])
+def test_wilson_matches_hand_computed_intervals(k, n, low, high):
+    # hand values: p̂ = k/n, z = 1.96, (p̂ + z²/2n ± z√(p̂(1−p̂)/n + z²/4n²)) / (1 + z²/n)
+    assert wilson(k, n) == pytest.approx((low, high), abs=1e-4)
+
+
+def test_wilson_covers_the_observed_rate_and_narrows_with_more_runs():
+    for n in (1, 5, 47, 200):
+        for k in range(n + 1):
+            lo, hi = wilson(k, n)
+            assert 0.0 <= lo <= k / n <= hi <= 1.0
+    assert wilson(30, 47)[1] - wilson(30, 47)[0] > wilson(300, 470)[1] - wilson(300, 470)[0]
+
+
+def test_jobs_cover_every_factor_level_and_clip_once_and_skip_finished_runs():
+    clips = load_clips("eval")[:3]
+    names = ["hybrid_astar", "np_guided_astar"]
+    jobs = study_jobs(["latency", "friction"], ["mild", "severe"], clips, [0, 2], names, set())
+    assert len(jobs) == 2 * (1 + 2 * 2) and jobs[0][:2] == ("none", "none")
+    assert {(f, lv, k) for f, lv, k, _ in jobs} == {("none", "none", 0), ("none", "none", 2)} | {
+        (f, lv, k) for f in ("latency", "friction") for lv in ("mild", "severe") for k in (0, 2)}
+    done = {("latency", "mild", "hybrid_astar", clips[0].name), ("none", "none", "hybrid_astar", clips[2].name),
+            ("none", "none", "np_guided_astar", clips[2].name)}
+    left = study_jobs(["latency", "friction"], ["mild", "severe"], clips, [0, 2], names, done)
+    assert ("latency", "mild", 0, ("np_guided_astar",)) in left and len(left) == len(jobs) - 1
+    assert sum(len(j[3]) for j in left) == 2 * 10 - 3
+
+
+def test_the_record_log_appends_and_drops_a_row_a_kill_cut_short(tmp_path):
+    path = tmp_path / "records.csv"
+    log = RecordLog(path)
+    log.append([{"factor": "none", "level": "none", "planner": "p", "clip": "a", "x": "[1, 2]"}])
+    log.append([{"factor": "latency", "level": "mild", "planner": "p", "clip": "a", "x": "3"}])
+    with path.open("a") as fh:
+        fh.write("latency,severe,p")  # killed mid-row
+    again = RecordLog(path)
+    assert again.done() == {("none", "none", "p", "a"), ("latency", "mild", "p", "a")}
+    again.append([{"factor": "latency", "level": "severe", "planner": "p", "clip": "a", "x": "4"}])
+    assert [r["x"] for r in again.rows()] == ["[1, 2]", "3", "4"]
+
+
+def test_a_study_runs_resumes_after_a_kill_and_writes_its_outputs(tmp_path):
+    out = tmp_path / "study"
+    args = ["--clips", "--clip-names", CLIP, "--planners", "hybrid_astar", "--factors", "latency", "--levels",
+            "severe", "--workers", "1", "--no-rrd"]
+    result = main(args + ["--out", str(out)])
+    rows = list(csv.DictReader((out / "records.csv").open()))
+    assert [(r["factor"], r["level"], r["setting"]) for r in rows] == [("none", "none", "none"),
+                                                                       ("latency", "severe", "0.3 s")]
+    assert rows[0]["footprint_success"] == "1" and rows[0]["seed"] == "0"
+    assert (out / "plots" / "latency.png").stat().st_size > 0 and "### latency (control)" in result["table"]
+    assert json.loads((out / "config.json").read_text())["argv"] == args[:-3]  # the study, not where it ran
+    # a kill after the first row: the resumed study runs only the missing one, with the stored settings
+    lines = (out / "records.csv").read_text().splitlines(keepends=True)
+    (out / "records.csv").write_text("".join(lines[:2]))
+    resumed = main(["--resume", str(out), "--workers", "1", "--no-rrd"])
+    again = list(csv.DictReader((out / "records.csv").open()))
+    assert [(r["factor"], r["level"]) for r in again] == [("none", "none"), ("latency", "severe")]
+    assert {k: v for k, v in again[1].items() if "time" not in k and k != "realtime_factor"} == {
+        k: v for k, v in rows[1].items() if "time" not in k and k != "realtime_factor"}
+    assert len(resumed["rows"]) == 2
+
+
+def test_the_table_reads_rates_per_level_with_the_undisturbed_rows_shared():
+    rows = [{"factor": "none", "level": "none", "planner": "hybrid_astar", "clip": c, "footprint_success": s,
+             "contacts": 0} for c, s in (("a", 1), ("b", 1))]
+    rows += [{"factor": "friction", "level": "severe", "planner": "hybrid_astar", "clip": c, "footprint_success": s,
+              "contacts": n} for c, s, n in (("a", 1, 0), ("b", 0, 2))]
+    assert rates(rows, "friction", "hybrid_astar", "footprint_success") == [(2, 2), (0, 0), (0, 0), (1, 2)]
+    assert rates(rows, "latency", "hybrid_astar", "contacts")[0] == (0, 2)
+    table = format_table(rows, ["friction"], ["hybrid_astar"])
+    lo, hi = wilson(1, 2)
+    assert f"| Hybrid A* | 1.00 [{wilson(2, 2)[0]:.2f}, 1.00] / 0.00 | – | – | 0.50 [{lo:.2f}, {hi:.2f}] / 0.50 |" \
+        in table
+
+
+def test_dry_run_counts_the_runs_and_creates_nothing(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    main(["--clips", "--clips-limit", "2", "--planners", "hybrid_astar", "np_guided_astar", "--dry-run"])
+    assert capsys.readouterr().out.startswith(f"{2 * 2 * (1 + 8 * 3)} runs ")
+    assert not any(tmp_path.iterdir())  # no run folder
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["--planners", "hybrid_astar"], "--clips"),
+    (["--resume", "/nonexistent/study"], "config.json"),
+    (["--clips", "--factors", "wind"], "invalid choice"),
+])
+def test_mistakes_exit_2_with_one_error_line(argv, message, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2 and message in capsys.readouterr().err
