@@ -121,8 +121,8 @@ def read_records(path: Path) -> list[dict]:
 
 def evaluation_missing(arm: Arm, run: RunSpec) -> str:
     """Why ``arm`` cannot be evaluated on ``run``'s checkpoint (empty when it can): an adapted-HOPE checkpoint has
-    no staged or ensemble-swapped evaluation here."""
-    if run.config.trainer == "hope_policy.train" and arm.evaluation != "own":
+    no ensemble-swapped evaluation."""
+    if run.config.trainer == "hope_policy.train" and arm.evaluation not in ("own", "staged"):
         return f"trained; the {arm.evaluation} evaluation of an adapted-HOPE checkpoint is not built yet"
     return ""
 
@@ -131,7 +131,8 @@ def evaluation_argv(arm: Arm, run: RunSpec, folder: Path) -> list[str]:
     """The experiment CLI that writes ``folder``'s records for ``run``'s output checkpoint (`RunSpec.output`)."""
     checkpoint, benchmark = str(run.output), run.config.benchmark
     if run.config.trainer == "hope_policy.train":
-        return [sys.executable, "-m", "experiments.planners", "--benchmark", benchmark, "--methods", "hope",
+        method = "staged_astar_hope" if arm.evaluation == "staged" else "hope"
+        return [sys.executable, "-m", "experiments.planners", "--benchmark", benchmark, "--methods", method,
                 "--hope-checkpoint", checkpoint, "--out", str(folder)]
     if arm.evaluation == "staged":
         return [sys.executable, "-m", "experiments.planners", "--benchmark", benchmark, "--checkpoint", checkpoint,

@@ -150,9 +150,11 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--checkpoint", type=Path, default=DEFAULT_CHECKPOINT,
                         help=f"NeuralParker checkpoint for the learned methods (default {DEFAULT_CHECKPOINT})")
     parser.add_argument("--methods", nargs="+", choices=METHODS, default=list(DEFAULT_METHODS),
-                        help="planners to run (default all but hope, which needs --hope-checkpoint)")
+                        help="planners to run (default all but hope and staged_astar_hope: they need "
+                             "--hope-checkpoint)")
     parser.add_argument("--hope-checkpoint", type=Path,
-                        help="adapted-HOPE checkpoint for the hope method (hope_policy.train's final.pt)")
+                        help="adapted-HOPE checkpoint of the hope and staged_astar_hope methods "
+                             "(hope_policy.train's final.pt)")
     parser.add_argument("--convention", choices=["reference_point", "footprint"], default="reference_point")
     parser.add_argument("--vehicle", type=vehicle_spec, default=VehicleSpec(),
                         help="vehicle planned for: a preset (sedan, the default; van) or a vehicle JSON file "

@@ -52,7 +52,8 @@ class PlannerOptions:
     ompl_seed: int = 0
     """OMPL's random seed."""
     hope_checkpoint: Path | None = None
-    """Checkpoint of 'hope', the adapted HOPE baseline (`hope_policy.train`'s ``final.pt``)."""
+    """Checkpoint of 'hope', the adapted HOPE baseline (`hope_policy.train`'s ``final.pt``), also the second stage of
+    'staged_astar_hope'."""
     benchmark: str | None = None
     """The scenes the planners will plan ('factorial', 'topology', 'examples', 'site'): a checkpoint of another
     observation layout is refused when loaded; None checks nothing."""
@@ -120,6 +121,12 @@ def _staged_astar_np(options: PlannerOptions, load: PolicyLoader) -> Planner:
     return StagedPlanner(_learned(options, load, "staged_astar_np"), _search(options))
 
 
+def _staged_astar_hope(options: PlannerOptions, load: PolicyLoader) -> Planner:
+    from np_policy.staged import StagedPlanner
+
+    return StagedPlanner(_hope(options, load), _search(options), name="staged_astar_hope")
+
+
 def _ompl_rrtstar(options: PlannerOptions, load: PolicyLoader) -> Planner:
     from np_sim.planners.ompl_peer import OmplPeer, OmplPeerConfig
 
@@ -158,6 +165,7 @@ REGISTRY: dict[str, Entry] = {
     "neuralparker_footprint": Entry("NeuralParker (footprint)", _neuralparker_footprint),
     "staged_astar_np": Entry("Hybrid A* → NP", _staged_astar_np),
     "hope": Entry("Adapted HOPE", _hope),
+    "staged_astar_hope": Entry("Hybrid A* → HOPE", _staged_astar_hope),
 }
 """Every planner kind by name (module docstring: how to add one)."""
 

@@ -4,7 +4,8 @@
   (sampled positions, kept up to a collision when the rollout fails) is the guide of ``HybridAStar.plan``, whose
   search and feasibility tests are unchanged. Plan time includes the rollout.
 * ``StagedPlanner`` (paper Table ``tab:twostage``): a region-goal Hybrid A* prefix to the first state within
-  ``handoff_radius_m`` (10 m) of the target, then the learned planner from that state, without retraining. The
+  ``handoff_radius_m`` (10 m) of the target, then a learned planner from that state, without retraining:
+  NeuralParker (``staged_astar_np``) or the adapted HOPE (``staged_astar_hope``, `hope_policy.planner`). The
   raw prefix is handed over (the paper's "frozen raw-path fallback"; no continuous-curvature smoothing here).
   ``StagedPlan.metrics()`` adds the prefix and downstream metrics (eq:metrics) and excludes the single hand-off
   curvature jump, as the table caption prescribes; a gear change at the hand-off is a real reversal and counts.
@@ -90,14 +91,14 @@ class StagedPlan(Plan):
 
 
 class StagedPlanner:
-    """Region-goal Hybrid A* prefix to ``handoff_radius_m`` of the target, then the learned planner."""
+    """Region-goal Hybrid A* prefix to ``handoff_radius_m`` of the target, then the learned planner ``learned`` (any
+    planner with ``plan(scene, start) -> Plan``: NeuralParker or the adapted HOPE); ``name`` is the registry key."""
 
-    name = "staged_astar_np"
-    """Registry key of the planner kind (`np_sim.planners.protocol.Planner`)."""
-
-    def __init__(self, learned: NeuralParkerPlanner, search: HybridAStar | None = None, handoff_radius_m: float = 10.0):
+    def __init__(self, learned, search: HybridAStar | None = None, handoff_radius_m: float = 10.0,
+                 name: str = "staged_astar_np"):
         if not handoff_radius_m > 0:
             raise ValueError(f"StagedPlanner: handoff_radius_m must be > 0, got {handoff_radius_m!r}")
+        self.name = name
         self.learned = learned
         self.search = HybridAStar() if search is None else search
         self.handoff_radius_m = handoff_radius_m

@@ -91,6 +91,29 @@ def test_staged_hands_over_within_the_radius(learned):
     _assert_free_by_the_paper_rule(scene, plan)
 
 
+HOPE_CHECKPOINT = Path("checkpoints/runs/factorial_hope_seed0/final.pt")
+
+
+@pytest.mark.skipif(not HOPE_CHECKPOINT.exists(), reason="no trained adapted-HOPE checkpoint")
+def test_staged_hope_hands_over_and_claims_only_free_plans():
+    from experiments.registry import PlannerOptions, build_planners
+    from hope_policy.planner import HopePlanner
+
+    staged = build_planners(["staged_astar_hope"], PlannerOptions(hope_checkpoint=HOPE_CHECKPOINT))["staged_astar_hope"]
+    assert staged.name == "staged_astar_hope" and isinstance(staged.learned, HopePlanner)
+    scene = _pocket_scene()
+    plan = staged.plan(scene, [3.0, 28.0, 0.0])
+    assert plan.handoff_index >= 1, plan.reason
+    handoff = np.asarray(plan.start, float)
+    for kappa, length in plan.arcs[: plan.handoff_index]:
+        handoff = arc_step(handoff, kappa, length)
+    assert math.hypot(*(handoff[:2] - scene.target[:2])) <= 10.0
+    if plan.success:  # whatever HOPE does from the hand-off, a claimed success is free under the paper's rule
+        _assert_free_by_the_paper_rule(scene, plan)
+    else:
+        assert plan.reason.startswith("downstream: ")
+
+
 @needs_checkpoint
 def test_cli_smoke_writes_records(tmp_path: Path):
     result = main(["--benchmark", "factorial", "--limit", "1", "--out", str(tmp_path), "--methods", *DEFAULT_METHODS])

@@ -20,7 +20,7 @@ FOOTPRINT = Path("checkpoints/site_np_footprint.pt")
 
 def test_every_entry_builds_a_planner_of_its_name_and_the_options_convention():
     options = PlannerOptions(checkpoint=CHECKPOINT, footprint_checkpoint=FOOTPRINT, convention="footprint")
-    names = [name for name in REGISTRY if name != "hope"]  # hope: its own checkpoint, below
+    names = [name for name in REGISTRY if "hope" not in name]  # HOPE's: their own checkpoint, below
     built = build_planners(names, options)
     assert list(built) == names
     for name, planner in built.items():
@@ -37,8 +37,9 @@ def test_every_entry_builds_a_planner_of_its_name_and_the_options_convention():
 
 
 def test_hope_without_its_checkpoint_names_the_flag_that_gives_one():
-    with pytest.raises(FileNotFoundError, match="--hope-checkpoint"):
-        build_planners(["hope"], PlannerOptions())
+    for name in ("hope", "staged_astar_hope"):
+        with pytest.raises(FileNotFoundError, match="--hope-checkpoint"):
+            build_planners([name], PlannerOptions())
 
 
 def test_the_clis_offer_registered_planners_and_label_rows_from_the_registry():
