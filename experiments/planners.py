@@ -47,6 +47,7 @@ from np_sim.vehicle import VehicleSpec
 
 METHODS = ("hybrid_astar", "np_guided_astar", "ompl_rrtstar", "neuralparker", "staged_astar_np", "hope",
            "staged_astar_hope")
+"""Planners of the table (`experiments.registry`), in its row order."""
 DEFAULT_METHODS = tuple(m for m in METHODS if m not in ("hope", "staged_astar_hope"))
 """What runs without naming methods: all but the adapted HOPE, which needs its own checkpoint."""
 DEFAULT_CHECKPOINT = Path("checkpoints/factorial_np_seed0.pt")
