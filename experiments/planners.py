@@ -49,7 +49,7 @@ METHODS = ("hybrid_astar", "np_guided_astar", "ompl_rrtstar", "neuralparker", "s
            "staged_astar_hope")
 """Planners of the table (`experiments.registry`), in its row order."""
 DEFAULT_METHODS = tuple(m for m in METHODS if m not in ("hope", "staged_astar_hope"))
-"""What runs without naming methods: all but the adapted HOPE, which needs its own checkpoint."""
+"""What runs without naming methods: all but the two that play the adapted HOPE, which need its checkpoint."""
 DEFAULT_CHECKPOINT = Path("checkpoints/factorial_np_seed0.pt")
 
 
