@@ -126,7 +126,8 @@ def format_table(records: list[dict[str, Any]], methods: list[str]) -> str:
                     for m, rows in by_method.items()}
     lines += ["", "Successes failing the rule they are scored by: "
               + ", ".join(f"{label} {n}" for label, n in false_claims.items()) + "."]
-    blocked = {(r["scene"], r["start_id"]) for r in records if not r["start_footprint_free"]}
+    # records of runs before the column was recorded have no start_footprint_free: their starts count as free
+    blocked = {(r["scene"], r["start_id"]) for r in records if not r.get("start_footprint_free", 1)}
     if blocked:
         lines += ["", f"Starts where the vehicle's footprint is not free (drawn for the default car): {len(blocked)} "
                       f"of {len({(r['scene'], r['start_id']) for r in records})} (records: start_footprint_free = 0)."]
