@@ -54,14 +54,20 @@ PLAN_COLOURS = ("tab:blue", "tab:orange", "tab:purple", "tab:brown", "tab:pink",
 """Plan colours of ``plans.png``, none the start's green or the target's red."""
 
 
+def _checked_start(start) -> np.ndarray:
+    """``start`` as a (3,) pose; ConfigError unless it is three finite numbers."""
+    pose = np.asarray(start, float)
+    if pose.shape != (3,) or not np.all(np.isfinite(pose)):
+        raise ConfigError(f"--start: expected three finite numbers X Y THETA, got {np.ravel(pose).tolist()}")
+    return pose
+
+
 def resolve_start(scene: Scene, start, seed: int, convention: str, vehicle: VehicleSpec,
                   source: str) -> tuple[np.ndarray, str]:
     """(start pose, where it came from): ``start`` when given, else the scene's first explicit start, else one
     drawn from its start region with ``seed``; SceneError when it is in collision under ``convention``."""
     if start is not None:
-        pose, how = np.asarray(start, float), "--start"
-        if pose.shape != (3,) or not np.all(np.isfinite(pose)):
-            raise ConfigError(f"--start: expected three finite numbers X Y THETA, got {np.ravel(pose).tolist()}")
+        pose, how = _checked_start(start), "--start"
     elif scene.starts is not None and len(scene.starts):
         pose, how = np.array(scene.starts[0]), "file"
     else:
@@ -146,6 +152,7 @@ def run_scene(path: Path, start=None, planners: list[str] | None = None,
     """Plan ``path``'s scene from one start with every planner, execute each plan, write the run folder (module
     docstring); returns the records, the table, the start and the folder."""
     vehicle = VehicleSpec() if vehicle is None else vehicle
+    start = None if start is None else _checked_start(start)
     scene = Scene.load(path, vehicle=vehicle)
     options = PlannerOptions(checkpoint=checkpoint, footprint_checkpoint=footprint_checkpoint,
                              hope_checkpoint=hope_checkpoint, convention=convention, vehicle=vehicle)
@@ -193,7 +200,8 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--convention", choices=["reference_point", "footprint"], default="footprint",
                         help="collision convention of the searches (default footprint)")
     parser.add_argument("--vehicle", type=vehicle_spec, default=VehicleSpec(),
-                        help="vehicle planned for and driven: a preset (sedan, the default; van) or a vehicle JSON file")
+                        help="vehicle planned for and driven: a preset (sedan, the default; van) or a vehicle JSON "
+                             "file")
     parser.add_argument("--controller", choices=list(CONTROLLERS), default="lqr")
     parser.add_argument("--seed", type=non_negative_int, default=0,
                         help="seed of the start drawn from the start region (no --start, no starts in the file)")
