@@ -333,8 +333,8 @@ def main(argv=None) -> dict[str, Any]:
     start = time.perf_counter()
     run_jobs(jobs, names, loop, args.seed, log, args.workers or default_workers(), args.ray_address)
     rows = log.rows()
-    table = format_table(rows, args.factors, names) + "\n" + "\n".join(notes)
-    (folder / "table.md").write_text(table.strip() + "\n")
+    table = "\n".join([format_table(rows, args.factors, names), *notes]).strip()
+    (folder / "table.md").write_text(table + "\n")
     (folder / "plots").mkdir(exist_ok=True)
     plots = [factor_figure(rows, f, names, folder / "plots" / f"{f}.png") for f in args.factors]
     recordings = [] if args.no_rrd else record_failures(rows, loop, args.seed, folder)

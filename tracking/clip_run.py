@@ -291,8 +291,7 @@ class ReplanningLoop:
         self.clip, self.planner, self.config, self.log = clip, planner, config, log
         self.tracker = config.tracker
         self.hooks = hooks
-        perceives = disturbance is not None and disturbance.value and disturbance.factor.startswith("detection_")
-        self.disturbance = disturbance if perceives else None
+        self.disturbance = disturbance if disturbance is not None and disturbance.group == "perception" else None
         if not isinstance(planner, Planner):
             raise TypeError(f"run_clip: expected a planner (np_sim.planners.Planner: plan, convention and name), got "
                             f"{type(planner).__name__}")

@@ -124,13 +124,18 @@ class Disturbance:
         return cls(factor, 0.0 if level == "none" else FACTORS[factor].levels[LEVELS.index(level)], seed)
 
     @property
+    def group(self) -> str:
+        """Where the factor acts: 'perception', 'localisation', 'control' or 'vehicle'; 'none' at magnitude 0."""
+        return FACTORS[self.factor].group if self.value else "none"
+
+    @property
     def setting(self) -> str:
         """The physical setting, e.g. 'μ × 0.55'."""
         return FACTORS[self.factor].setting(self.value)
 
     def tracker(self, config: TrackerConfig) -> TrackerConfig:
         """``config`` with the physical factors applied (friction, payload, body length); else ``config`` itself."""
-        if not self.value or FACTORS[self.factor].group != "vehicle":
+        if self.group != "vehicle":
             return config
         model, plant = config.model, config.plant
         if self.factor == "friction":
@@ -151,7 +156,7 @@ class Disturbance:
         ``run_key``, ``frame``, its object id), so they depend neither on the call order nor on the detections'
         order. A shifted detection that would overlap ``keep_clear`` (a shapely geometry, the target footprint: a scene
         must keep its target free) keeps its recorded place."""
-        if not self.value or self.factor not in ("detection_noise", "detection_drop"):
+        if self.group != "perception":
             return ids, polygons
         shift, draw = np.zeros((len(ids), 2)), np.zeros(len(ids))
         for j, object_id in enumerate(ids):
@@ -169,7 +174,7 @@ class Disturbance:
     def hooks(self, run_key: str, config: TrackerConfig) -> "RunHooks | None":
         """The run-time side of one run (``run_key``: e.g. the clip name; the draws are seeded by it and the seed,
         the same for every planner): a localisation error or an actuator; None for the other factors."""
-        if not self.value or self.factor not in ("pose_noise", "latency", "steer_rate"):
+        if self.group not in ("localisation", "control"):
             return None
         if self.factor == "pose_noise":
             return RunHooks(pose_error=PoseError(self.value, np.random.default_rng([self.seed, _key(run_key)])))
@@ -249,10 +254,4 @@ class RunHooks:
         return (curvature, torque) if self.actuator is None else self.actuator(curvature, torque)
 
 
-def level_disturbances(factors, levels, seed: int) -> list[tuple[str, str, "Disturbance | None"]]:
-    """(factor, level, disturbance) of the study: the undisturbed run ('none', 'none', None) first, then every
-    factor at every level."""
-    return [("none", "none", None)] + [(f, lv, Disturbance.at(f, lv, seed)) for f in factors for lv in levels]
-
-
-__all__ = ["FACTORS", "LEVELS", "Actuator", "Disturbance", "Factor", "PoseError", "RunHooks", "level_disturbances"]
+__all__ = ["FACTORS", "LEVELS", "Actuator", "Disturbance", "Factor", "PoseError", "RunHooks"]

@@ -258,7 +258,7 @@ def test_contacts_are_measured_with_the_longer_body_and_the_controllers_keep_the
     wall = [[front + 0.1, -3.0], [front + 1.0, -3.0], [front + 1.0, 3.0], [front + 0.1, 3.0]]
     scene = open_scene([-10.0, 0.0, 0.0], obstacles=[{"polygon": wall}])
     nominal = build_world(scene, [0.0, 0.0, 0.0], config)
-    longer = build_world(scene, [0.0, 0.0, 0.0], Disturbance.at("body_length", "mild").tracker(config))
+    longer = build_world(scene, [0.0, 0.0, 0.0], Disturbance.at("body_length", "severe").tracker(config))  # +0.23 m
     assert nominal.body_contacts() == [] and [n for n, _ in longer.body_contacts()] == ["obstacle_0"]
     heavy = build_world(scene, [0.0, 0.0, 0.0], Disturbance.at("payload", "severe").tracker(config))
     assert (heavy.mass_kg, heavy.com_ahead_m, heavy.yaw_inertia_kgm2) == (
@@ -271,7 +271,8 @@ def test_the_factor_table_has_three_increasing_levels_and_bad_disturbances_are_r
         assert len(factor.levels) == len(LEVELS) and 0 < factor.levels[0] < factor.levels[1] < factor.levels[2]
         assert factor.levels[2] < factor.upper
     assert Disturbance.at("friction", "moderate").setting == "μ × 0.55"
-    assert PlantConfig().body(TrackerConfig().vehicle) is TrackerConfig().vehicle
+    spec = TrackerConfig().vehicle
+    assert PlantConfig().body(spec) is spec
     for bad, match in (({"factor": "wind", "value": 0.1}, "factor"), ({"factor": "detection_drop", "value": 1.0},
                                                                        "value"),
                        ({"factor": "latency", "value": -0.1}, "value"),
