@@ -16,10 +16,10 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-import shapely
 
 from np_sim.config import ObservationConfig
 from np_sim.frames import to_target_frame
+from np_sim.kernels.nearest import point_polygon_distances
 from np_sim.observation import boundary_slots
 from np_sim.scene import Scene
 
@@ -41,12 +41,16 @@ class NearestObjects:
         vertices = config.vertices_per_obstacle
         self._rows = np.stack([to_target_frame(p, scene.target)[np.arange(vertices) % len(p)].reshape(-1)
                                for p in polygons])
-        self._shapes = shapely.polygons([np.asarray(p) for p in polygons])
+        self._counts = np.array([len(p) for p in polygons], np.int64)
+        self._verts = np.zeros((len(polygons), int(self._counts.max()), 2))
+        for j, p in enumerate(polygons):
+            self._verts[j, : len(p)] = p
 
     def indices(self, poses) -> np.ndarray:
         """(m, max_obstacles) scene indices of the obstacles each pose row (x, y[, θ]) observes, nearest first."""
-        xy = np.atleast_2d(np.asarray(poses, np.float64))[:, :2]
-        distance = shapely.distance(shapely.points(xy)[:, None], self._shapes[None, :])
+        xy = np.ascontiguousarray(np.atleast_2d(np.asarray(poses, np.float64))[:, :2])
+        distance = np.empty((len(xy), len(self._counts)))
+        point_polygon_distances(xy, self._verts, self._counts, distance)
         return np.argsort(distance, axis=1, kind="stable")[:, : self.config.max_obstacles]
 
     def slots(self, poses) -> np.ndarray:

@@ -2,8 +2,8 @@
 policy's obstacle slots hold the nearest obstacles to the current pose, re-selected after every arc, while LiDAR and
 every collision check see the whole scene.
 
-The selection is checked against the clips' own point-to-polygon distance (a numpy even-odd test, independent of
-the shapely call the rule uses); the slots against `obstacle_slots` of a scene built from the expected obstacles;
+The compiled distance is checked against shapely, the selection against the clips' own point-to-polygon distance
+(a numpy even-odd test); the slots against `obstacle_slots` of a scene built from the expected obstacles;
 the LiDAR against `cast_rays` on the whole scene; the checks by an arc through an obstacle that is not observed.
 """
 
@@ -17,6 +17,7 @@ from np_sim.config import EnvConfig
 from np_sim.env_core import BatchCore
 from np_sim.errors import CapacityError
 from np_sim.kernels import step as K
+from np_sim.kernels.nearest import point_polygon_distances
 from np_sim.lidar import cast_rays, footprint_ranges
 from np_sim.lots import LotConfig, generate_lot
 from np_sim.nearest import NearestObjects, exceeds_slots
@@ -49,6 +50,20 @@ def test_the_nearest_obstacles_are_selected_nearest_first(lot):
     assert chosen.shape == (25, 20)
     for pose, row in zip(poses, chosen):
         assert row.tolist() == _expected_order(lot, pose)
+
+
+def test_the_distance_kernel_matches_shapely(lot):
+    from shapely.geometry import Point, Polygon
+
+    selector = NearestObjects(lot, CONFIG.observation)
+    rng = np.random.default_rng(1)
+    points = np.column_stack([rng.uniform(0, 70, 40), rng.uniform(0, 36, 40)])
+    points[:5] = [o.vertices.mean(axis=0) for o in lot.obstacles[:5]]  # inside a car: distance 0
+    distance = np.empty((40, len(lot.obstacles)))
+    point_polygon_distances(points, selector._verts, selector._counts, distance)
+    expected = [[Polygon(o.vertices).distance(Point(p)) for o in lot.obstacles] for p in points]
+    np.testing.assert_allclose(distance, expected, atol=1e-12)
+    assert np.all(distance[np.arange(5), np.arange(5)] == 0.0)
 
 
 def _sub_scene_slots(scene: Scene, pose) -> np.ndarray:
