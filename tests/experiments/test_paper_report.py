@@ -157,8 +157,12 @@ def test_a_finished_adapted_hope_run_is_read_from_final_pt_and_its_planner_recor
     (seed0 / "final.pt").write_bytes(b"")
     measured = measure(hope, runs, 1, False, {})
     assert sorted(measured.records) == [0] and measured.seeds_text().startswith("1 of 3 (seed 0; seed 1: not trained")
-    staged = measure(Arm("Hybrid A* → HOPE", "factorial_hope", "staged"), runs, 1, False, {})
-    assert "staged evaluation of an adapted-HOPE checkpoint is not built yet" in staged.missing[0]
+    staged_arm = Arm("Hybrid A* → HOPE", "factorial_hope", "staged")
+    assert measure(staged_arm, runs, 1, False, {}).missing[0] == "trained, not evaluated yet"
+    argv = evaluation_argv(staged_arm, runs[("factorial_hope", 0)], seed0 / "eval_factorial_staged")
+    assert argv[argv.index("--methods") + 1] == "staged_astar_hope" and "--hope-checkpoint" in argv
+    assert measure(Arm("Ensemble", "factorial_hope", "ensemble"), runs, 1, False, {}).missing[0].endswith(
+        "the ensemble evaluation of an adapted-HOPE checkpoint is not built yet")
     argv = evaluation_argv(hope, runs[("factorial_hope", 0)], seed0 / "eval_factorial")
     assert argv[1:] == ["-m", "experiments.planners", "--benchmark", "factorial", "--methods", "hope",
                         "--hope-checkpoint", str(seed0 / "final.pt"), "--out", str(seed0 / "eval_factorial")]
