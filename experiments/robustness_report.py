@@ -83,10 +83,11 @@ def _cell(counts: tuple[int, int], contacts: tuple[int, int]) -> str:
     return f"{k / n:.2f} [{lo:.2f}, {hi:.2f}] / {c / n:.2f}"
 
 
-def format_table(rows: list[dict], factors: list[str], planners: list[str]) -> str:
-    """Markdown: per factor, per planner, footprint success [95 % Wilson interval] / contact rate at every level."""
-    clips = len({r["clip"] for r in rows})
-    lines = [f"Closed-loop robustness on {clips} clip(s): footprint success [95 % Wilson interval] / contact rate "
+def format_table(rows: list[dict], factors: list[str], planners: list[str], key: str = "clip") -> str:
+    """Markdown: per factor, per planner, footprint success [95 % Wilson interval] / contact rate at every level
+    (``key``: the column naming a clip or an episode)."""
+    units = len({r[key] for r in rows})
+    lines = [f"Closed-loop robustness on {units} {key}(s): footprint success [95 % Wilson interval] / contact rate "
              f"(runs with a chassis contact), one factor at a time.", ""]
     for factor in factors:
         spec = FACTORS[factor]

@@ -337,7 +337,7 @@ class Scene:
                 f"{source}: start_region: expected a polygon inside the boundary, but it leaves the boundary "
                 f"(e.g. at ({outside.x:g}, {outside.y:g}))"
             )
-        shapes = [_obstacle_shape(obstacle) for obstacle in self.obstacles]
+        shapes = [obstacle_shape(obstacle) for obstacle in self.obstacles]
         if shapes and region.difference(unary_union(shapes)).area <= 0.0:
             covering = [f"obstacles[{i}]" for i, shape in enumerate(shapes) if shape.intersects(region)]
             raise SceneError(
@@ -585,7 +585,7 @@ def _check_polygon(vertices: np.ndarray, source: str, where: str) -> ShapelyPoly
     return polygon
 
 
-def _obstacle_shape(obstacle: Obstacle) -> ShapelyPolygon:
+def obstacle_shape(obstacle: Obstacle) -> ShapelyPolygon:
     """The obstacle as a shapely polygon; a circle as its circumscribed 64-gon (covers the whole disc)."""
     if isinstance(obstacle, PolygonObstacle):
         return ShapelyPolygon(obstacle.vertices)

@@ -49,6 +49,7 @@ import numpy as np
 import shapely
 
 from np_sim.errors import ConfigError
+from np_sim.scene import CircleObstacle, PolygonObstacle, Scene, obstacle_shape
 from tracking.config import PlantConfig, TrackerConfig
 
 LEVELS = ("mild", "moderate", "severe")
@@ -158,10 +159,7 @@ class Disturbance:
         must keep its target free) keeps its recorded place."""
         if self.group != "perception":
             return ids, polygons
-        shift, draw = np.zeros((len(ids), 2)), np.zeros(len(ids))
-        for j, object_id in enumerate(ids):
-            rng = np.random.default_rng([self.seed, _key(run_key), int(frame), int(object_id)])
-            shift[j], draw[j] = rng.normal(0.0, 1.0, 2), rng.random()
+        shift, draw = self._draws(run_key, frame, ids)
         if self.factor == "detection_drop":
             kept = draw >= self.value
             return ids[kept], polygons[kept]
@@ -170,6 +168,34 @@ class Disturbance:
             blocked = shapely.intersects(shapely.polygons(moved), keep_clear)
             moved[blocked] = polygons[blocked]
         return ids, moved
+
+    def perceive_scene(self, run_key: str, scene: Scene, keep_clear=None) -> Scene:
+        """``scene`` as the disturbed perception reports it once, before planning (a frozen-start episode): its
+        obstacles, numbered in scene order, shifted or dropped as `perceive` does detections of frame 0 (a circle
+        moves its centre); a shifted obstacle that would overlap ``keep_clear`` keeps its place. The boundary and
+        the target are map knowledge and stay. ``scene`` itself for the other factors."""
+        if self.group != "perception" or not scene.obstacles:
+            return scene
+        shift, draw = self._draws(run_key, 0, np.arange(len(scene.obstacles)))
+        if self.factor == "detection_drop":
+            kept = tuple(o for o, d in zip(scene.obstacles, draw) if d >= self.value)
+            return dataclasses.replace(scene, obstacles=kept)
+        moved = []
+        for obstacle, offset in zip(scene.obstacles, self.value * shift):
+            new = (CircleObstacle(obstacle.center + offset, obstacle.radius) if isinstance(obstacle, CircleObstacle)
+                   else PolygonObstacle(obstacle.vertices + offset))
+            blocked = keep_clear is not None and shapely.intersects(obstacle_shape(new), keep_clear)
+            moved.append(obstacle if blocked else new)
+        return dataclasses.replace(scene, obstacles=tuple(moved))
+
+    def _draws(self, run_key: str, frame: int, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Per object: a standard normal 2-D offset and a uniform draw, seeded by (seed, ``run_key``, ``frame``,
+        object id) so they depend neither on the call order nor on the objects' order."""
+        shift, draw = np.zeros((len(ids), 2)), np.zeros(len(ids))
+        for j, object_id in enumerate(ids):
+            rng = np.random.default_rng([self.seed, _key(run_key), int(frame), int(object_id)])
+            shift[j], draw[j] = rng.normal(0.0, 1.0, 2), rng.random()
+        return shift, draw
 
     def hooks(self, run_key: str, config: TrackerConfig) -> "RunHooks | None":
         """The run-time side of one run (``run_key``: e.g. the clip name; the draws are seeded by it and the seed,

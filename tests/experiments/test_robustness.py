@@ -29,15 +29,15 @@ def test_wilson_covers_the_observed_rate_and_narrows_with_more_runs():
 
 
 def test_jobs_cover_every_factor_level_and_clip_once_and_skip_finished_runs():
-    clips = load_clips("eval")[:3]
+    units = [c.name for c in load_clips("eval")[:3:2]]
     names = ["hybrid_astar", "np_guided_astar"]
-    jobs = study_jobs(["latency", "friction"], ["mild", "severe"], clips, [0, 2], names, set())
+    jobs = study_jobs(["latency", "friction"], ["mild", "severe"], units, names)
     assert len(jobs) == 2 * (1 + 2 * 2) and jobs[0][:2] == ("none", "none")
-    assert {(f, lv, k) for f, lv, k, _ in jobs} == {("none", "none", 0), ("none", "none", 2)} | {
-        (f, lv, k) for f in ("latency", "friction") for lv in ("mild", "severe") for k in (0, 2)}
-    done = {("latency", "mild", "hybrid_astar", clips[0].name), ("none", "none", "hybrid_astar", clips[2].name),
-            ("none", "none", "np_guided_astar", clips[2].name)}
-    left = study_jobs(["latency", "friction"], ["mild", "severe"], clips, [0, 2], names, done)
+    assert {(f, lv, k) for f, lv, k, _ in jobs} == {("none", "none", 0), ("none", "none", 1)} | {
+        (f, lv, k) for f in ("latency", "friction") for lv in ("mild", "severe") for k in (0, 1)}
+    done = {("latency", "mild", "hybrid_astar", units[0]), ("none", "none", "hybrid_astar", units[1]),
+            ("none", "none", "np_guided_astar", units[1])}
+    left = study_jobs(["latency", "friction"], ["mild", "severe"], units, names, done)
     assert ("latency", "mild", 0, ("np_guided_astar",)) in left and len(left) == len(jobs) - 1
     assert sum(len(j[3]) for j in left) == 2 * 10 - 3
 
@@ -77,6 +77,26 @@ def test_a_study_runs_resumes_after_a_kill_and_writes_its_outputs(tmp_path):
     assert len(resumed["rows"]) == 2
 
 
+def test_an_episode_study_on_frozen_starts_and_on_scene_files_keys_its_runs_by_episode(tmp_path):
+    out = tmp_path / "starts"
+    args = ["--benchmark", "factorial", "--limit", "1", "--planners", "hybrid_astar", "--factors", "detection_drop",
+            "--levels", "severe", "--workers", "1", "--no-rrd"]
+    main(args + ["--out", str(out)])
+    rows = list(csv.DictReader((out / "records.csv").open()))
+    assert [(r["episode"], r["level"]) for r in rows] == [("factorial-test-near-reverse-easy-0#00", "none"),
+                                                          ("factorial-test-near-reverse-easy-0#00", "severe")]
+    assert int(rows[1]["obstacles_perceived"]) < int(rows[0]["obstacles_perceived"]) == 11  # p = 0.5 dropped some
+    lines = (out / "records.csv").read_text().splitlines(keepends=True)
+    (out / "records.csv").write_text("".join(lines[:2]))
+    resumed = main(["--resume", str(out), "--workers", "1", "--no-rrd"])
+    assert [r["level"] for r in resumed["rows"]] == ["none", "severe"]
+    files = main(["--scenes", "reverse_bay", "--starts", "2", "--seed", "4", "--planners", "hybrid_astar",
+                  "--factors", "latency", "--levels", "mild", "--workers", "1", "--no-rrd",
+                  "--out", str(tmp_path / "files")])
+    assert [r["episode"] for r in files["rows"]] == ["reverse_bay#00", "reverse_bay#01"] * 2
+    assert files["rows"][0]["scene_file"].endswith("reverse_bay.json") and "2 episode(s)" in files["table"]
+
+
 def test_the_table_reads_rates_per_level_with_the_undisturbed_rows_shared():
     rows = [{"factor": "none", "level": "none", "planner": "hybrid_astar", "clip": c, "footprint_success": s,
              "contacts": 0} for c, s in (("a", 1), ("b", 1))]
@@ -101,6 +121,10 @@ def test_dry_run_counts_the_runs_and_creates_nothing(tmp_path, capsys, monkeypat
     (["--planners", "hybrid_astar"], "--clips"),
     (["--resume", "/nonexistent/study"], "config.json"),
     (["--clips", "--factors", "wind"], "invalid choice"),
+    (["--benchmark", "factorial", "--starts", "3"], "--starts: only with --scenes"),
+    (["--benchmark", "factorial", "--set", "controller=lqr"], "--set: only with --clips"),
+    (["--benchmark", "topology", "--planners", "neuralparker", "--limit", "1"], "--checkpoint"),
+    (["--clips", "--planners", "staged_astar_np"], "unknown planner"),
 ])
 def test_mistakes_exit_2_with_one_error_line(argv, message, capsys):
     with pytest.raises(SystemExit) as exit_:
