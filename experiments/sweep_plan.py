@@ -105,9 +105,8 @@ class Configuration:
 _LOT = "{name}_seed{seed}_lot"
 """Run folders of the recipe's rows: the shipped Factorial seeds were named for the whole-lot curriculum."""
 _TOPOLOGY_AE = (("checkpoints/bev/topology_ae.pt",
-                  "python -m np_policy.bev_encoder --benchmark topology --out checkpoints/bev/topology_ae.pt "
+                  "python -m np_policy.pretrain_bev --benchmark topology --out checkpoints/bev/topology_ae.pt "
                   "--seed 0"),)
-_BEV = "the BEV representation (rendered image and pretrained autoencoder) is not built yet"
 PAPER_PLAN = (
     Configuration("factorial_np", "factorial", ("main", "staged", "connector", "curriculum"), "factorial_np.json",
                   run_name=_LOT),
@@ -117,7 +116,8 @@ PAPER_PLAN = (
     Configuration("factorial_hope", "factorial", ("main", "staged"), "factorial_hope.json", recipe=False,
                   epoch_s=HOPE_EPISODE_S, trainer="hope_policy.train"),
     Configuration("topology_np_none", "topology", ("representation",), "topology_np_none.json", run_name=_LOT),
-    Configuration("topology_np_bev", "topology", ("representation",), missing=_BEV),
+    Configuration("topology_np_bev", "topology", ("representation",), "topology_np_bev.json", run_name=_LOT,
+                  requires=_TOPOLOGY_AE),
     Configuration("topology_np_vertices", "topology", ("representation",), "topology_np_vertices.json",
                   run_name=_LOT),
     *(Configuration(f"topology_hope_{added}", "topology", ("representation",), f"topology_hope_{added}.json",

@@ -17,18 +17,18 @@ Pretraining: Adam at 1e-3, mean-squared error between the reconstruction and the
 random actions in the benchmark's training environment (`np_sim.env.ParkingVectorEnv`, uniform starts); one
 autoencoder per benchmark. A held-out tenth of the images measures the reconstruction error after every epoch.
 
-    python -m np_policy.bev_encoder --benchmark topology --out checkpoints/bev/topology_ae.pt --seed 0
+    python -m np_policy.pretrain_bev --benchmark topology --out checkpoints/bev/topology_ae.pt --seed 0
 
 The images follow from the seed, so they are collected again rather than stored; after every epoch the model,
 optimiser and shuffling state go to ``FILE.snapshot.pt`` (the project's checkpoint format), and the same command
 continues from there after a kill. The finished file holds the autoencoder, its config (raster included) and the
-per-epoch errors; a finished file is never overwritten. `FrozenBevEncoder` loads it for the env's BEV observation
+per-epoch errors, and ``FILE.png`` beside it shows held-out originals above their reconstructions; a finished
+file is never overwritten. `FrozenBevEncoder` loads it for the env's BEV observation
 (``ObservationConfig.use_bev``): the encoder only, in eval mode, without gradients.
 """
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import dataclasses
 import time
@@ -40,11 +40,11 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 from torch import nn
+from tqdm import tqdm
 
 from np_policy.checkpoint import CheckpointError, load_checkpoint, load_weights, save_checkpoint
 from np_policy.config import check_types
 from np_sim.bev import BevConfig, render_bev_batch
-from np_sim.cli import cli_boundary, non_negative_int, positive_int
 from np_sim.config import ConnectorConfig, EnvConfig, config_from_dict
 from np_sim.env import ParkingVectorEnv
 from np_sim.errors import ConfigError
@@ -281,10 +281,11 @@ def snapshot_path(out: Path) -> Path:
 
 
 def pretrain(config: PretrainConfig, out: str | Path, images: np.ndarray | None = None,
-             log=print) -> list[dict[str, Any]]:
+             log=tqdm.write, progress: bool = True) -> list[dict[str, Any]]:
     """Pretrain the autoencoder of ``config`` and save it to ``out`` (module docstring); continues from
     ``out``'s snapshot when one of the same config exists. ``images`` (uint8) replaces the benchmark's
-    random-policy images (tests). Returns the per-epoch rows (epoch, train_mse, held_out_mse, seconds)."""
+    random-policy images (tests); ``log`` gets a line per epoch beside the progress bar. Returns the per-epoch
+    rows (epoch, train_mse, held_out_mse, seconds)."""
     out = Path(out)
     if out.exists():
         raise FileExistsError(f"{out} exists: a finished pretraining is never overwritten; choose another --out")
@@ -306,19 +307,49 @@ def pretrain(config: PretrainConfig, out: str | Path, images: np.ndarray | None 
     train_idx, held_idx = split(len(images), config)
     log(f"{len(images)} images ({len(train_idx)} training, {len(held_idx)} held out) in "
         f"{time.perf_counter() - started:.1f} s")
-    for epoch in range(len(rows) + 1, config.epochs + 1):
+    bar = tqdm(range(len(rows) + 1, config.epochs + 1), initial=len(rows), total=config.epochs, unit="epoch",
+               desc=f"BEV autoencoder ({config.benchmark})", disable=not progress)
+    for epoch in bar:
         started = time.perf_counter()
         train_mse = train_epoch(model, optimizer, images[train_idx], config.batch_size, generator)
         held_out_mse = reconstruction_mse(model, images[held_idx])
         rows.append({"epoch": epoch, "train_mse": train_mse, "held_out_mse": held_out_mse,
                      "seconds": time.perf_counter() - started})
-        log(f"epoch {epoch}/{config.epochs}: train MSE {train_mse:.5f}, held-out MSE {rows[-1]['held_out_mse']:.5f} "
+        bar.set_postfix(train=f"{train_mse:.5f}", held_out=f"{held_out_mse:.5f}")
+        log(f"epoch {epoch}/{config.epochs}: train MSE {train_mse:.5f}, held-out MSE {held_out_mse:.5f} "
             f"({rows[-1]['seconds']:.1f} s)")
         save_checkpoint(snapshot, {"model": model.state_dict(), "config": config.to_dict(), "metrics": rows,
                                    "optimizer": optimizer.state_dict(), "generator": generator.get_state()})
+    reconstruction_figure(model, images[held_idx[:8]], out.with_suffix(".png"))
     save_checkpoint(out, {"kind": KIND, "model": model.state_dict(), "config": config.to_dict(), "metrics": rows})
     snapshot.unlink(missing_ok=True)
     return rows
+
+
+@torch.no_grad()
+def reconstruction_figure(model: BevAutoencoder, images: np.ndarray, path: Path) -> Path:
+    """A PNG of ``images`` (uint8, (n, 3, S, S)) in the top row and ``model``'s reconstructions below them."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    model.eval()
+    with small_convolutions():
+        rebuilt = model(as_input(images)).clamp(0.0, 1.0).numpy()
+    n = len(images)
+    fig, axes = plt.subplots(2, n, figsize=(1.6 * n, 3.5), squeeze=False)
+    for k in range(n):
+        for row, picture in enumerate((images[k] / 255.0, rebuilt[k])):
+            axes[row, k].imshow(np.transpose(picture, (1, 2, 0)), interpolation="nearest")
+            axes[row, k].set_xticks([])
+            axes[row, k].set_yticks([])
+    axes[0, 0].set_ylabel("original", fontsize=8)
+    axes[1, 0].set_ylabel("reconstruction", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
 
 
 # ------------------------------------------------------------------------------------------------ frozen encoder
@@ -330,7 +361,7 @@ class FrozenBevEncoder:
         path = Path(path)
         payload = load_checkpoint(path)
         if payload.get("kind") != KIND:
-            raise CheckpointError(f"{path}: expected a BEV autoencoder file (python -m np_policy.bev_encoder), found "
+            raise CheckpointError(f"{path}: expected a BEV autoencoder file (python -m np_policy.pretrain_bev), found "
                                   f"kind {payload.get('kind')!r}")
         config = PretrainConfig.from_dict(payload["config"])
         model = BevAutoencoder(config.network, config.raster.size_px)
@@ -360,32 +391,6 @@ def load_frozen_encoder(path: str | Path) -> FrozenBevEncoder:
 register_bev_encoder_loader(load_frozen_encoder)
 
 
-# ------------------------------------------------------------------------------------------------ CLI
 def parameter_count(module: nn.Module) -> int:
     """Number of scalar parameters of ``module``."""
     return sum(p.numel() for p in module.parameters())
-
-
-@cli_boundary
-def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
-    """Pretrain one benchmark's BEV autoencoder (see the module docstring)."""
-    parser = argparse.ArgumentParser(prog="python -m np_policy.bev_encoder", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--benchmark", required=True, choices=PRETRAIN_BENCHMARKS,
-                        help="training scenes of the random-policy rollouts")
-    parser.add_argument("--out", required=True, type=Path, help="autoencoder file to write (must not exist)")
-    parser.add_argument("--images", type=positive_int, default=PretrainConfig.images, help="images to collect")
-    parser.add_argument("--epochs", type=positive_int, default=PretrainConfig.epochs, help="training epochs")
-    parser.add_argument("--seed", type=non_negative_int, required=True, help="seed of rollouts, split and training")
-    parser.add_argument("--threads", type=positive_int, help="torch threads (default: torch's choice)")
-    args = parser.parse_args(argv)
-    if args.threads:
-        torch.set_num_threads(args.threads)
-    config = PretrainConfig(benchmark=args.benchmark, images=args.images, epochs=args.epochs, seed=args.seed)
-    rows = pretrain(config, args.out)
-    print(f"{args.out}: held-out MSE {rows[-1]['held_out_mse']:.5f} after {len(rows)} epochs")
-    return rows
-
-
-if __name__ == "__main__":
-    main()

@@ -12,9 +12,10 @@ import torch
 
 from cli_helpers import one_error_line
 from np_policy.bev_encoder import (AutoencoderConfig, BevAutoencoder, FrozenBevEncoder, PretrainConfig, as_input,
-                                   collect_images, main, parameter_count, pretrain, reconstruction_mse, split)
+                                   collect_images, parameter_count, pretrain, reconstruction_mse, split)
 from np_policy.checkpoint import CheckpointError, load_checkpoint
 from np_policy.network import ActorCritic
+from np_policy.pretrain_bev import main
 from np_sim.bev import render_bev
 from np_sim.config import EnvConfig, ObservationConfig
 from np_sim.env import ParkingVectorEnv
@@ -99,6 +100,13 @@ def test_tiny_pretraining_lowers_the_held_out_error(pretrained, images):
     assert [r["epoch"] for r in rows] == [1, 2, 3]
     assert rows[-1]["held_out_mse"] < 0.8 * untrained
     assert rows[-1]["held_out_mse"] < rows[0]["held_out_mse"]
+
+
+def test_the_finished_pretraining_draws_held_out_originals_above_their_reconstructions(pretrained):
+    import matplotlib.image
+
+    picture = matplotlib.image.imread(pretrained[0].with_suffix(".png"))
+    assert picture.shape[0] > 200 and picture.shape[1] > 2 * picture.shape[0]  # two rows of eight images
 
 
 def test_killed_pretraining_resumes_to_the_same_weights(tmp_path, pretrained, images):
