@@ -83,7 +83,7 @@ class HopeTrainConfig:
     """Where the curriculum pool is drawn: each scene's start region, or 'lot' (the whole drivable lot), as
     ``np_policy.config.TrainConfig.curriculum_region``; the Table III rows use the NeuralParker recipe's 'lot'."""
     bev_encoder_file: str = ""
-    """The pretrained BEV autoencoder file (``python -m np_policy.bev_encoder``) of ``env.added_input='bev'``;
+    """The pretrained BEV autoencoder file (``python -m np_policy.pretrain_bev``) of ``env.added_input='bev'``;
     empty for the other inputs."""
     torch_threads: int = 1
     """torch intra-op threads, set again before every update: the envs' numba parallel loops reset the OpenMP
@@ -404,7 +404,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     parser.add_argument("--episodes", type=positive_int, default=10_000, help="episode budget (paper: 10,000)")
     parser.add_argument("--input", choices=ADDED_INPUTS, default="none", help="added scene input (Table III)")
     parser.add_argument("--bev-encoder", type=Path, help="pretrained BEV autoencoder of --input bev "
-                        "(python -m np_policy.bev_encoder)")
+                        "(python -m np_policy.pretrain_bev)")
     parser.add_argument("--no-mask", action="store_true", help="disable HOPE's action mask (and its branch)")
     parser.add_argument("--no-takeover", action="store_true", help="disable the Reeds-Shepp takeover")
     parser.add_argument("--curriculum-scale", type=positive_float, default=None,

@@ -52,14 +52,14 @@ class ObservationConfig:
     ``bev_encoder_file`` applied to the ego-aligned raster (`np_sim.bev`, no trajectory tail) at every step;
     replaces the vertex slots, so ``use_obstacles`` and ``use_boundary`` must be off."""
     bev_encoder_file: str = ""
-    """Pretrained BEV autoencoder file (``python -m np_policy.bev_encoder``); required when ``use_bev``."""
+    """Pretrained BEV autoencoder file (``python -m np_policy.pretrain_bev``); required when ``use_bev``."""
     bev_latent_dim: int = 128
     """Size of the BEV latent; must equal the encoder's."""
 
     def __post_init__(self) -> None:
         if self.use_bev and not self.bev_encoder_file:
             raise ConfigError("ObservationConfig.bev_encoder_file: use_bev needs the pretrained autoencoder file "
-                              "(python -m np_policy.bev_encoder), got none")
+                              "(python -m np_policy.pretrain_bev), got none")
         if self.use_bev and (self.use_obstacles or self.use_boundary):
             raise ConfigError("ObservationConfig.use_bev: the BEV latent replaces the vertex slots; set "
                               "use_obstacles and use_boundary to false")
