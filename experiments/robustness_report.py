@@ -83,6 +83,18 @@ def _cell(counts: tuple[int, int], contacts: tuple[int, int]) -> str:
     return f"{k / n:.2f} [{lo:.2f}, {hi:.2f}] / {c / n:.2f}"
 
 
+def failure_reasons(rows: list[dict], factor: str, level: str, planner: str) -> str:
+    """The failure reasons of ``planner``'s failed runs under ``factor`` at ``level`` (the undisturbed rows for
+    'none'), most frequent first, e.g. 'contact 3, timeout 1'; '–' without failures."""
+    name = "none" if level == "none" else factor
+    counts: dict[str, int] = {}
+    for r in rows:
+        if r["factor"] == name and r["level"] == level and r["planner"] == planner and not int(r["footprint_success"]):
+            reason = r.get("reason") or "not parked"
+            counts[reason] = counts.get(reason, 0) + 1
+    return ", ".join(f"{k} {n}" for k, n in sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))) or "–"
+
+
 def format_table(rows: list[dict], factors: list[str], planners: list[str], key: str = "clip") -> str:
     """Markdown: per factor, per planner, footprint success [95 % Wilson interval] / contact rate at every level
     (``key``: the column naming a clip or an episode)."""
@@ -97,5 +109,9 @@ def format_table(rows: list[dict], factors: list[str], planners: list[str], key:
             success = rates(rows, factor, planner, "footprint_success")
             contact = rates(rows, factor, planner, "contacts")
             lines.append(f"| {label(planner)} | " + " | ".join(_cell(s, c) for s, c in zip(success, contact)) + " |")
+        lines += ["", "Failure reasons:", "", "| Planner | none | mild | moderate | severe |", "|---|---|---|---|---|"]
+        for planner in planners:
+            lines.append(f"| {label(planner)} | " + " | ".join(
+                failure_reasons(rows, factor, level, planner) for level in ("none", *LEVELS)) + " |")
         lines.append("")
     return "\n".join(lines)

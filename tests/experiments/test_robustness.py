@@ -101,13 +101,14 @@ def test_the_table_reads_rates_per_level_with_the_undisturbed_rows_shared():
     rows = [{"factor": "none", "level": "none", "planner": "hybrid_astar", "clip": c, "footprint_success": s,
              "contacts": 0} for c, s in (("a", 1), ("b", 1))]
     rows += [{"factor": "friction", "level": "severe", "planner": "hybrid_astar", "clip": c, "footprint_success": s,
-              "contacts": n} for c, s, n in (("a", 1, 0), ("b", 0, 2))]
+              "contacts": n, "reason": r} for c, s, n, r in (("a", 1, 0, ""), ("b", 0, 2, "contact"))]
     assert rates(rows, "friction", "hybrid_astar", "footprint_success") == [(2, 2), (0, 0), (0, 0), (1, 2)]
     assert rates(rows, "latency", "hybrid_astar", "contacts")[0] == (0, 2)
     table = format_table(rows, ["friction"], ["hybrid_astar"])
     lo, hi = wilson(1, 2)
     assert f"| Hybrid A* | 1.00 [{wilson(2, 2)[0]:.2f}, 1.00] / 0.00 | – | – | 0.50 [{lo:.2f}, {hi:.2f}] / 0.50 |" \
         in table
+    assert "| Hybrid A* | – | – | – | contact 1 |" in table  # failure reasons per level
 
 
 def test_dry_run_counts_the_runs_and_creates_nothing(tmp_path, capsys, monkeypatch):
