@@ -5,7 +5,9 @@
 
 One checkpoint (default the shipped Factorial one) drives the unified arm and the staged arm's downstream stage
 (`np_policy.staged.StagedPlanner`: a region-goal Hybrid A* prefix to the first state within 10 m of the target,
-then the policy from there). The paper pins a Topology-Stress pocket case (Type 2) with the Topology-Stress
+then the policy from there). The paper's diagnostic hands over to the adapted HOPE planner: when its seed-0
+checkpoint exists (``HOPE_CHECKPOINT``), a third arm, Hybrid A* → HOPE, plans the same case from the same start
+(drawn whether it succeeds or not: the case is pinned by the first two arms). The paper pins a Topology-Stress pocket case (Type 2) with the Topology-Stress
 vertices policy; until that policy is trained, the case is pinned on the Factorial **training** split by this
 rule: the first long-range scene in benchmark order whose full-range start (`np_sim.starts.UniformStartSampler`,
 seed ``--start-seed``) lies beyond the hand-off radius and that both arms solve. No frozen test start is looked
@@ -34,9 +36,18 @@ from np_sim.plan import Plan
 from np_sim.plotting import plot_scene, target_marker
 from np_sim.scene import Scene
 
-UNIFIED, STAGED = "Unified NP", "Hybrid A* → NP"
-STAGED_NOTE = ("the staged arm uses NeuralParker downstream; the paper's diagnostic hands over to the adapted HOPE "
-               "planner, a row that comes when HOPE is trained")
+UNIFIED, STAGED, STAGED_HOPE = "Unified NP", "Hybrid A* → NP", "Hybrid A* → HOPE"
+HOPE_CHECKPOINT = Path("checkpoints/runs/factorial_hope_seed0/final.pt")
+"""The adapted HOPE planner of the third arm (seed 0 of the complete baseline on Factorial)."""
+
+
+def staged_note(hope: bool) -> str:
+    """Which learned planners the staged arms hand over to."""
+    if hope:
+        return ("the staged arms hand over to NeuralParker and, as in the paper's diagnostic, to the adapted HOPE "
+                f"planner ({HOPE_CHECKPOINT}); the case is pinned by the first two arms")
+    return (f"the staged arm uses NeuralParker downstream; the paper's diagnostic hands over to the adapted HOPE "
+            f"planner, whose arm needs {HOPE_CHECKPOINT}")
 
 
 def find_case(unified: NeuralParkerPlanner, staged: StagedPlanner, scenes: list[Scene],
@@ -54,12 +65,15 @@ def find_case(unified: NeuralParkerPlanner, staged: StagedPlanner, scenes: list[
 
 
 def format_case(scene: Scene, plans: dict[str, Plan]) -> str:
-    """Markdown: one row per arm with eq:metrics and plan time."""
-    lines = [f"Scene `{scene.name}` (training split); {STAGED_NOTE}.", "",
+    """Markdown: one row per arm with eq:metrics and plan time (a failed arm: its reason)."""
+    lines = [f"Scene `{scene.name}` (training split); {staged_note(STAGED_HOPE in plans)}.", "",
              "| Arm | Succ. | L (m) | Rev. | Δκ | plan time (ms) |", "|---|---|---|---|---|---|"]
     for arm, plan in plans.items():
+        if not plan.success:
+            lines.append(f"| {arm} | 0 ({plan.reason}) | – | – | – | {1e3 * plan.plan_time_s:.1f} |")
+            continue
         L, rev, dk = plan.metrics()
-        lines.append(f"| {arm} | {int(plan.success)} | {L:.2f} | {rev} | {dk:.2f} | {1e3 * plan.plan_time_s:.1f} |")
+        lines.append(f"| {arm} | 1 | {L:.2f} | {rev} | {dk:.2f} | {1e3 * plan.plan_time_s:.1f} |")
     return "\n".join(lines)
 
 
@@ -69,8 +83,11 @@ def draw_case(scene: Scene, plans: dict[str, Plan], radius_m: float, vehicle, pn
     ax = figure.add_subplot()
     plot_scene(ax, scene)
     ax.get_legend().remove()
-    styles = {UNIFIED: dict(color="tab:blue", linestyle="-"), STAGED: dict(color="tab:green", linestyle="--")}
+    styles = {UNIFIED: dict(color="tab:blue", linestyle="-"), STAGED: dict(color="tab:green", linestyle="--"),
+              STAGED_HOPE: dict(color="tab:orange", linestyle=":")}
     for arm, plan in plans.items():
+        if not plan.success:
+            continue
         L, rev, dk = plan.metrics()
         ax.plot(*plan.sample(0.1)[:, :2].T, linewidth=2.0, **styles[arm],
                 label=f"{arm} (L {L:.1f} m, {rev} rev., Δκ {dk:.2f})")
@@ -82,7 +99,8 @@ def draw_case(scene: Scene, plans: dict[str, Plan], radius_m: float, vehicle, pn
     ax.plot(*stem.T, color="tab:green", linewidth=2.0)
     ax.add_patch(Circle(tuple(np.asarray(scene.target[:2], float)), radius_m, fill=False, linestyle="--",
                         edgecolor="0.4", label=f"{radius_m:g} m hand-off boundary"))
-    ax.set_title(f"{scene.name}: unified versus staged (NeuralParker downstream)")
+    downstream = "NeuralParker and HOPE" if STAGED_HOPE in plans else "NeuralParker"
+    ax.set_title(f"{scene.name}\nunified versus staged ({downstream} downstream)", fontsize="medium")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small", frameon=False)
     figure.savefig(png, dpi=120)
 
@@ -95,13 +113,18 @@ def run(checkpoint: Path = DEFAULT_CHECKPOINT, start_seed: int = 0, out: Path | 
     scenes = load_benchmark("factorial", "train") if scenes is None else scenes
     starts = training_starts(scenes, start_seed)
     scene, start, plans = find_case(unified, staged, scenes, starts)
+    if Path(HOPE_CHECKPOINT).exists():
+        from hope_policy.planner import HopePlanner
+
+        plans[STAGED_HOPE] = StagedPlanner(HopePlanner.from_checkpoint(HOPE_CHECKPOINT), staged.search,
+                                           name="staged_astar_hope").plan(scene, start)
     folder = run_folder("overview_case", out)
     draw_case(scene, plans, staged.handoff_radius_m, unified.env_config.vehicle, folder / "overview_case.png")
     table = format_case(scene, plans)
     (folder / "case.md").write_text(table + "\n")
     (folder / "case.json").write_text(json.dumps({
         "checkpoint": str(checkpoint), "start_seed": start_seed, "scene": scene.name, "start": start.tolist(),
-        "note": STAGED_NOTE, "arms": {arm: dict(zip(("L", "reversals", "delta_kappa"), plan.metrics()),
+        "note": staged_note(STAGED_HOPE in plans), "arms": {arm: dict(zip(("L", "reversals", "delta_kappa"), plan.metrics()),
                                                 success=plan.success, plan_time_s=plan.plan_time_s)
                                       for arm, plan in plans.items()}}, indent=2, default=float))
     return {"folder": folder, "png": folder / "overview_case.png", "table": table, "scene": scene.name}
