@@ -143,6 +143,12 @@ def planner_names(config: ClosedLoopConfig) -> tuple[list[str], list[str]]:
     return list(PLANNERS), []
 
 
+def disturbed(config, disturbance=None):
+    """The `tracking.clip_run.ClipRunConfig` ``config`` with the physical factors of ``disturbance`` (None: none)
+    applied to its tracker (`tracking.disturbance.Disturbance.tracker`)."""
+    return config if disturbance is None else dataclasses.replace(config, tracker=disturbance.tracker(config.tracker))
+
+
 def clip_rows(clip, planners: dict[str, Any], controller: str, rrd_dir: Path | None, render: bool,
               config=None, disturbance=None) -> list[dict]:
     """Run one clip with every planner (``config``: a `tracking.clip_run.ClipRunConfig`, default its defaults;
@@ -150,9 +156,7 @@ def clip_rows(clip, planners: dict[str, Any], controller: str, rrd_dir: Path | N
     ``config.tracker``); one record row per planner."""
     from tracking.clip_run import clip_mujoco_world, clip_world, object_of_geom, run_clip
 
-    config = ClipRunConfig() if config is None else config
-    if disturbance is not None:
-        config = dataclasses.replace(config, tracker=disturbance.tracker(config.tracker))
+    config = disturbed(ClipRunConfig() if config is None else config, disturbance)
     ground = clip_world(clip)
     world = clip_mujoco_world(clip, config.tracker, ground)  # compiled once, reset by each run
     rows = []

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from experiments.closed_loop import ClosedLoopConfig, clip_indices, clip_rows, split_clips
+from experiments.closed_loop import ClosedLoopConfig, clip_indices, clip_rows, disturbed, split_clips
 from experiments.common import first
 from experiments.registry import PlannerOptions
 from experiments.scene_files import episode_scenes, load_scene_files, scene_columns
@@ -49,10 +49,8 @@ class ClipSource:
         from tracking.clip_run import run_clip
 
         disturbance = disturbance_at(factor, level, seed)
-        config = self.loop.clip_run if disturbance is None else dataclasses.replace(
-            self.loop.clip_run, tracker=disturbance.tracker(self.loop.clip_run.tracker))
-        run_clip(self.clips[unit], planner, self.loop.controller, config=config, rerun_path=path,
-                 disturbance=disturbance)
+        run_clip(self.clips[unit], planner, self.loop.controller, config=disturbed(self.loop.clip_run, disturbance),
+                 rerun_path=path, disturbance=disturbance)
 
 
 @dataclass(frozen=True)
