@@ -269,6 +269,11 @@ class TrainConfig:
     site_recorded_skip: int = 0
     """Site only: the first this many difficult training clips (in clip order) are left out of the recorded resets,
     so they can validate the result as clips the policy never started from."""
+    train_margin_m: float = 0.0
+    """Beyond the paper: the training and selection envs, and the start pools, use the vehicle's footprint grown by
+    this much on every side (`VehicleSpec.inflated`), so an episode ends when the body comes closer than this to an
+    obstacle or the boundary, and the policy learns to keep that clearance. The checkpoint keeps the real vehicle:
+    planners roll it out against the real body. Meaningful under the footprint convention; 0 is the paper's."""
     env: EnvConfig = field(default_factory=EnvConfig)
     ppo: PPOConfig = field(default_factory=PPOConfig)
     network: NetworkConfig = field(default_factory=NetworkConfig)
@@ -284,6 +289,11 @@ class TrainConfig:
         if not 0.0 <= self.site_recorded_share <= 1.0:
             raise ConfigError(f"TrainConfig.site_recorded_share: expected a share in [0, 1], "
                               f"got {self.site_recorded_share!r}")
+        if not (math.isfinite(self.train_margin_m) and self.train_margin_m >= 0.0):
+            raise ConfigError(f"TrainConfig.train_margin_m: expected a finite number >= 0 m, got {self.train_margin_m!r}")
+        if self.train_margin_m and self.env.collision != "footprint":
+            raise ConfigError("TrainConfig.train_margin_m: a clearance margin needs env.collision 'footprint' (the "
+                              f"reference-point convention has no body to grow), got {self.env.collision!r}")
         if self.site_recorded_skip < 0:
             raise ConfigError(f"TrainConfig.site_recorded_skip: expected >= 0 clips, got {self.site_recorded_skip!r}")
         if self.site_recorded_share and self.benchmark != "site":
@@ -297,6 +307,12 @@ class TrainConfig:
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict (JSON-safe)."""
         return dataclasses.asdict(self)
+
+    def training_env(self) -> EnvConfig:
+        """The env the run trains and selects in: ``env`` with the footprint grown by ``train_margin_m``."""
+        if not self.train_margin_m:
+            return self.env
+        return dataclasses.replace(self.env, vehicle=self.env.vehicle.inflated(self.train_margin_m))
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "TrainConfig":

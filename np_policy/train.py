@@ -134,11 +134,12 @@ class Trainer:
         if config.torch_threads:
             torch.set_num_threads(config.torch_threads)
         torch.manual_seed(config.seed)
+        env = config.training_env()
         if config.benchmark == "site":
             recorded = recorded_clips(config.site_recorded_skip) if config.site_recorded_share else []
             self.scenes, starts = cached_training_pool(self.out / SITE_POOL_FILE, config.site_pool, config.seed,
                                                        observation=config.env.observation,
-                                                       vehicle=config.env.vehicle, progress=True,
+                                                       vehicle=env.vehicle, progress=True,
                                                        recorded_share=config.site_recorded_share,
                                                        recorded_clips=recorded)
             self.sampler = PairedStartSampler(starts)
@@ -147,11 +148,12 @@ class Trainer:
             self.scenes = training_scenes(config.benchmark)
             self.sampler = CurriculumStartSampler(curriculum_scenes(self.scenes, config.curriculum_region),
                                                   fraction=config.curriculum.start_fraction,
-                                                  pool_size=config.curriculum_pool, seed=config.seed)
-            select_sampler = UniformStartSampler(self.scenes, config.env.vehicle)
-        self.envs = ParkingVectorEnv(self.scenes, ppo.num_train_envs, config.env, seed=config.seed,
+                                                  pool_size=config.curriculum_pool, seed=config.seed,
+                                                  vehicle=env.vehicle)
+            select_sampler = UniformStartSampler(self.scenes, env.vehicle)
+        self.envs = ParkingVectorEnv(self.scenes, ppo.num_train_envs, env, seed=config.seed,
                                      start_sampler=self.sampler)
-        self.select_envs = ParkingVectorEnv(self.scenes, ppo.num_test_envs, config.env, seed=config.seed + 1,
+        self.select_envs = ParkingVectorEnv(self.scenes, ppo.num_test_envs, env, seed=config.seed + 1,
                                             start_sampler=select_sampler)
         self.model = ActorCritic(config.env.observation, config.network)
         self.optimizer = make_optimizer(self.model, ppo)

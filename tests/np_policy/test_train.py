@@ -439,3 +439,68 @@ def test_init_from_a_checkpoint_saved_before_newer_config_fields_existed():
     trainer = Trainer(TrainConfig.from_dict(benchmark_defaults("factorial")), "unused")
     trainer.initialize_from(source)
     assert all(torch.equal(stored["model"][k], v) for k, v in trainer.model.state_dict().items())
+
+
+def _clearance(scene, pose, vehicle):
+    """Shapely distance (m) from the footprint at ``pose`` to the nearest obstacle or the boundary; −1 when it
+    touches one or leaves the boundary."""
+    import shapely
+
+    body = shapely.Polygon(vehicle.footprint(pose))
+    lot = shapely.Polygon(scene.boundary)
+    obstacles = [shapely.Polygon(o.vertices) if hasattr(o, "vertices") else shapely.Point(*o.center).buffer(o.radius, 256)
+                 for o in scene.obstacles]
+    if not lot.contains(body) or any(o.intersects(body) for o in obstacles):
+        return -1.0
+    return min([lot.exterior.distance(body), *(o.distance(body) for o in obstacles)])
+
+
+def test_a_training_margin_grows_the_body_of_the_training_envs_and_starts_but_not_the_checkpoints(tmp_path):
+    """train_margin_m: every start the run draws (curriculum pool, selection episodes) keeps the margin from every
+    obstacle and the boundary (shapely), a start closer than the margin is in collision in the training env, and
+    the checkpoint keeps the real vehicle, so planners roll the policy out against the real body."""
+    import numpy as np
+
+    from np_sim.errors import StartInCollisionError
+
+    margin = 0.1
+    config = TrainConfig.from_dict(TINY | {"env": {"collision": "footprint"}, "train_margin_m": margin})
+    trainer = Trainer(config, tmp_path / "run")
+    real = config.env.vehicle
+    pools = [(trainer.scenes[k], pose) for k, pool in enumerate(trainer.sampler.pool) for pose in pool]
+    rng = np.random.default_rng(0)
+    picks = rng.integers(len(trainer.scenes), size=16)
+    selection = trainer.select_envs.core.sampler(rng, picks)
+    pools += [(trainer.scenes[k], pose) for k, pose in zip(picks, selection)]
+    assert min(_clearance(scene, pose, real) for scene, pose in pools) >= margin - 1e-6
+    scene, pose = pools[0]
+    plain = Trainer(TrainConfig.from_dict(TINY | {"env": {"collision": "footprint"}}), tmp_path / "plain")
+    close = _pose_with_clearance(scene, real, 0.05, pose)
+    k = trainer.scenes.index(scene)
+    plain.envs.core.reset_envs(np.array([0]), rng, k, close)  # valid for the real body
+    with pytest.raises(StartInCollisionError):
+        trainer.envs.core.reset_envs(np.array([0]), rng, k, close)
+    train(config, tmp_path / "run", epochs=1, progress=False)
+    saved = load_checkpoint(tmp_path / "run" / "snapshot.pt")["config"]
+    assert saved["train_margin_m"] == margin and saved["env"]["vehicle"]["width_m"] == real.width_m
+    with pytest.raises(ConfigError, match="train_margin_m: a clearance margin needs env.collision 'footprint'"):
+        TrainConfig.from_dict(TINY | {"train_margin_m": 0.2})
+    with pytest.raises(ConfigError, match="train_margin_m: expected a finite number >= 0 m, got -0.1"):
+        TrainConfig.from_dict(TINY | {"env": {"collision": "footprint"}, "train_margin_m": -0.1})
+
+
+def _pose_with_clearance(scene, vehicle, wanted, pose):
+    """``pose`` slid along its heading's normal until the footprint is about ``wanted`` m from the scene (bisection
+    on the shapely clearance)."""
+    import numpy as np
+
+    normal = np.array([-np.sin(pose[2]), np.cos(pose[2]), 0.0])
+    for direction in (normal, -normal):
+        lo, hi = 0.0, 5.0
+        if _clearance(scene, pose + hi * direction, vehicle) > 0:
+            continue
+        for _ in range(40):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if _clearance(scene, pose + mid * direction, vehicle) > wanted else (lo, mid)
+        return pose + lo * direction
+    raise AssertionError("no obstacle within 5 m on either side")

@@ -208,6 +208,19 @@ DERIVED_FROM_SIZE = {"bvh_aabb", "dof_length", "geom_aabb", "geom_rbound"}
 """Model fields MuJoCo derives from the geoms' sizes."""
 
 
+def test_the_tyres_contact_friction_is_the_tyre_friction():
+    """What MuJoCo uses at each tyre–ground contact (``data.contact.friction``, after it combines the two geoms'
+    parameters) is the configured tyre friction, nominal and lowered: the ground's default μ = 1 must not win."""
+    for config in (TrackerConfig(), Disturbance.at("friction", "severe").tracker(TrackerConfig())):
+        world = build_world(open_scene((0.0, 0.0, 0.0)), [0.0, 0.0, 0.0], config)
+        for _ in range(50):  # settle onto the ground
+            mujoco.mj_step(world.model, world.data)
+        ground = mujoco.mj_name2id(world.model, mujoco.mjtObj.mjOBJ_GEOM, "ground")
+        contacts = [world.data.contact[i] for i in range(world.data.ncon)]
+        tyres = [c.friction[0] for c in contacts if ground in (c.geom1, c.geom2)]
+        assert len(tyres) == 4 and np.allclose(tyres, config.model.tyre_friction)
+
+
 def test_lower_friction_changes_the_tyre_friction_and_nothing_else():
     base = _model_fields(TrackerConfig())
     low = _model_fields(Disturbance.at("friction", "severe").tracker(TrackerConfig()))
