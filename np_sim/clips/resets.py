@@ -23,7 +23,7 @@ from np_sim.clips.config import ClipConfig
 from np_sim.clips.geometry import clip_grid, geodesic_at, polygon_distances
 from np_sim.clips.model import Clip
 from np_sim.clips.splits import load_clips
-from np_sim.errors import ConfigError
+from np_sim.errors import ConfigError, SceneError
 from np_sim.kinematics import wrap_angle
 from np_sim.scene import PolygonObstacle, Scene
 from np_sim.site import SITE_OBSERVATION
@@ -103,7 +103,8 @@ def sample_recorded_reset(rng: np.random.Generator, clips: Sequence[Clip], *, ve
     The clips' starts are chosen hard (tight spots, target-averse headings, detours: `clip_difficulty`), which
     uniform App. C starts rarely are; training on the training clips' own starts puts those situations into the
     pool. A start whose footprint leaves the site, touches its boundary or a detection of the frame is drawn
-    again. Returns ``(scene, start_pose)``; RuntimeError after ``max_tries`` draws without a free start."""
+    again, and so is a frame whose detections touch ``vehicle``'s footprint at the target (never the real
+    vehicle's on the recorded clips; a body grown by a training margin, `TrainConfig.train_margin_m`). Returns ``(scene, start_pose)``; RuntimeError after ``max_tries`` draws without a free start."""
     if not clips:
         raise ConfigError("sample_recorded_reset: expected at least one clip, got none")
     vehicle = VehicleSpec() if vehicle is None else vehicle
@@ -120,7 +121,10 @@ def sample_recorded_reset(rng: np.random.Generator, clips: Sequence[Clip], *, ve
         footprint = ShapelyPolygon(vehicle.footprint(start))
         if not _start_fits(footprint, ShapelyPolygon(boundary), LinearRing(boundary), shapes):
             continue
-        scene = clip.frame_scene(frame, pose=start, vehicle=vehicle)
+        try:
+            scene = clip.frame_scene(frame, pose=start, vehicle=vehicle)
+        except SceneError:  # the frame's detections leave the target no room for this body (a grown one)
+            continue
         return replace(scene, name=f"{clip.name}/f{frame:03d}/recorded"), start
     raise RuntimeError(f"sample_recorded_reset: no free start in {max_tries} clip/frame draws")
 

@@ -261,6 +261,28 @@ def test_recorded_resets_replay_the_clips_own_task_as_the_closed_loop_sees_it(ev
         sample_recorded_reset(np.random.default_rng(0), [])
 
 
+def test_recorded_resets_for_a_grown_body_skip_frames_that_crowd_the_target(eval_clips):
+    """A training margin grows the body (`VehicleSpec.inflated`): frames whose detections come closer than the
+    margin to the target are drawn again, so every reset keeps the margin at the target (shapely distance)."""
+    from np_sim.errors import SceneError
+
+    grown = VEHICLE.inflated(0.4)
+    clips = eval_clips[:12]
+
+    def crowded(clip, frame):
+        try:
+            clip.frame_scene(frame, vehicle=grown)
+            return False
+        except SceneError:
+            return True
+
+    assert any(crowded(c, f) for c in clips for f in range(0, c.n_frames, 10))  # the rule has work to do here
+    for seed in range(10):
+        scene, start = sample_recorded_reset(np.random.default_rng(seed), clips, vehicle=grown)
+        body = ShapelyPolygon(VEHICLE.footprint(scene.target))
+        assert min(body.distance(ShapelyPolygon(o.vertices)) for o in scene.obstacles) >= 0.4 - 1e-9
+
+
 def test_a_pool_with_recorded_resets_keeps_its_app_c_part(eval_clips):
     clips = eval_clips[:3]
     plain_scenes, plain_starts = training_pool(4, seed=5, clips=clips)
