@@ -10,7 +10,8 @@ noise), its actions from ``CompiledActor`` (the same weights in one numba functi
 at batch 1). Every successful rollout is validated before it is claimed or chosen
 (`np_sim.validate.validation_failure`): the env's own rule, which it passes by construction, and under the
 footprint convention the exact swept footprint, which a rollout checked at 30 samples per arc can break between
-samples; such a rollout becomes a failure 'validation: …'. ``action='sample'`` plays one rollout of sampled actions
+samples; such a rollout becomes a failure 'validation: …' (a mean rollout the anytime test accepts is not validated
+again: that test implies the rule, `clearance_covers_sweep`). ``action='sample'`` plays one rollout of sampled actions
 instead of the mean (seeded per query, `query_seed`): how a policy trained with Tianshou acts at test time by
 default, for comparisons with figures measured that way.
 
@@ -33,7 +34,7 @@ from np_policy.checkpoint import check_vehicle, load_checkpoint, load_weights
 from np_policy.config import PAPER, NeuralParkerConfig, TrainConfig, check_benchmark_layout, checkpoint_config
 from np_policy.inference import CompiledActor
 from np_policy.network import ActorCritic
-from np_policy.sampling import PolicyRollouts, choose, clearance_level, steerable
+from np_policy.sampling import PolicyRollouts, choose, clearance_covers_sweep, clearance_level, steerable
 from np_sim.collision import path_valid
 from np_sim.config import EnvConfig
 from np_sim.plan import Plan
@@ -110,6 +111,14 @@ class NeuralParkerPlanner:
                        if config.action == "sample" else None)
         self.rescue = [PolicyRollouts(self.actor, std * scale, self.env_config, n, config.seed + 1 + k, first_arc,
                                       nearest) for k, (n, scale, first_arc) in enumerate(config.rescue)]
+        weights = config.weights
+        # Twice the steerable bound: the Hermite segment's curvature is known only at its samples.
+        kappa_limit = 2.0 * (1.0 + weights.curvature_tolerance) * self.body.kappa_max
+        self.accept_implies_valid = (config.accept_mean_m is not None and self.convention == "footprint"
+                                     and clearance_covers_sweep(self.body, config.accept_mean_m,
+                                                                weights.sample_ds_m, kappa_limit))
+        """The anytime test (``_accepted``) implies the claim check (``_claimed``), so an accepted mean rollout is
+        not validated a second time (`np_policy.sampling.clearance_covers_sweep`)."""
 
     @classmethod
     def from_checkpoint(cls, path: str | Path, config: NeuralParkerConfig | str = PAPER,
@@ -131,9 +140,11 @@ class NeuralParkerPlanner:
             return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage="sampled")
         plan, stage = self._mean_rollout(scene, start), "mean"
         anytime = self.config.accept_mean_m is not None
+        if self.accept_implies_valid and self._accepted(scene, plan):
+            return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
         if self.sampled is None or anytime:
             plan = self._claimed(scene, plan)
-        if anytime and self._accepted(scene, plan):
+        if anytime and not self.accept_implies_valid and self._accepted(scene, plan):
             return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
         if self.sampled is not None:
             plan, stage = self._choose_claimed(scene, [plan, *self.sampled(scene, start)], anytime), "sampled"

@@ -136,6 +136,16 @@ def clearance_level(scene: Scene, poses: np.ndarray, vehicle: VehicleSpec, margi
     return -1.0
 
 
+def clearance_covers_sweep(vehicle: VehicleSpec, margin_m: float, ds_m: float, kappa_limit: float) -> bool:
+    """Whether a path whose footprint grown by ``margin_m`` (`VehicleSpec.inflated`) is free at samples at most
+    ``ds_m`` apart along it, with |path curvature| ≤ ``kappa_limit``, is free when swept continuously (the exact
+    rule). Between two samples every body point travels at most ds·(1 + κ·r), r the farthest body point from the
+    reference point, so the body at any pose between them lies within half of that of the body at the nearer sample,
+    inside the grown rectangle (which contains the body's Minkowski sum with a disc of the margin)."""
+    r_max = float(np.max(np.hypot(*vehicle.footprint_local().T)))
+    return margin_m >= 0.5 * ds_m * (1.0 + kappa_limit * r_max)
+
+
 @dataclass(frozen=True)
 class ChoiceWeights:
     """How ``choose`` tells a steerable plan and trades drive time against clearance, reversals and the terminal

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from shapely.geometry import LinearRing, Point
 from shapely.geometry import Polygon as ShapelyPolygon
 from shapely.ops import unary_union
@@ -15,6 +17,7 @@ from np_policy.config import FOOTPRINT_ANYTIME, FOOTPRINT_BEST_OF_N, PRESETS, Ne
 from np_policy.planner import NeuralParkerPlanner, Policy
 from np_sim.clips.generation import generate_clip
 from np_sim.errors import ConfigError
+from np_sim.validate import validation_failure
 from np_sim.scene import CircleObstacle
 from tracking.perception import perceived_scene
 
@@ -63,6 +66,8 @@ def test_the_mean_rollout_is_kept_when_clear_and_otherwise_the_answer_is_best_of
             np.testing.assert_array_equal(plan.arcs, mean.arcs)
             rows = plan.sample(0.05)
             assert _shapely_clearance(scene, rows, anytime.body) >= FOOTPRINT_ANYTIME.accept_mean_m - 1e-9
+            assert anytime.accept_implies_valid and plan.success  # accepted without a second validation …
+            assert validation_failure(scene, plan, "footprint", anytime.body) == ""  # … which it would pass
         else:
             reference = best_of_n.plan(scene, start)
             np.testing.assert_array_equal(plan.arcs, reference.arcs)
@@ -88,3 +93,30 @@ def test_the_anytime_preset_is_best_of_n_with_the_wanted_margin_as_its_acceptanc
         NeuralParkerConfig(accept_mean_m=-0.1)
     with pytest.raises(ConfigError, match=r"NeuralParkerConfig.accept_mean_m: expected a number or null"):
         NeuralParkerConfig.from_dict({"accept_mean_m": "0.2"})
+
+
+@settings(max_examples=60, deadline=None)
+@given(kappa=st.floats(-1.5, 1.5), ds=st.floats(0.001, 0.05), theta=st.floats(-np.pi, np.pi),
+       gear=st.sampled_from([1.0, -1.0]))
+def test_clearance_at_samples_covers_the_body_between_them(kappa, ds, theta, gear):
+    """clearance_covers_sweep's claim, brute force with shapely: for a margin at its bound, the real body at every
+    pose between two samples ds apart on an arc of curvature κ lies inside the union of the two grown bodies."""
+    from np_policy.sampling import clearance_covers_sweep
+    from np_sim.vehicle import VehicleSpec
+
+    def arc_point(x, y, th, k, s):  # the unicycle's closed form (hand-derived, not the kernel's)
+        if abs(k * s) < 1e-12:
+            return (x + s * np.cos(th), y + s * np.sin(th), th)
+        return (x + (np.sin(th + k * s) - np.sin(th)) / k, y - (np.cos(th + k * s) - np.cos(th)) / k, th + k * s)
+
+    body = VehicleSpec()
+    r_max = max(np.hypot(*body.footprint_local().T))
+    margin = 0.5 * ds * (1.0 + abs(kappa) * r_max)
+    assert clearance_covers_sweep(body, margin, ds, abs(kappa))
+    assert not clearance_covers_sweep(body, 0.99 * margin, ds, abs(kappa))
+    start = (1.0, -2.0, theta)
+    end = arc_point(*start, kappa, gear * ds)
+    grown = body.inflated(margin)
+    covered = ShapelyPolygon(grown.footprint(start)).union(ShapelyPolygon(grown.footprint(end))).buffer(1e-9)
+    for f in np.linspace(0.0, 1.0, 21):
+        assert covered.covers(ShapelyPolygon(body.footprint(arc_point(*start, kappa, gear * ds * f))))
