@@ -47,8 +47,9 @@ def sample_points_world(pose, config=CONFIG) -> np.ndarray:
 
 
 def star_polygon(rng: np.random.Generator, centre, radius: float, n: int) -> np.ndarray:
-    """A simple (star-shaped, usually non-convex) polygon around ``centre``."""
-    angles = np.sort(rng.uniform(0, 2 * np.pi, n))
+    """A simple (star-shaped, usually non-convex) polygon around ``centre``: jittered evenly spaced angles keep every
+    gap below π (sorted uniform angles could leave one wider, and the closing edge could then cross another)."""
+    angles = 2 * np.pi * (np.arange(n) + rng.uniform(-0.4, 0.4, n)) / n
     radii = rng.uniform(0.3 * radius, radius, n)
     return np.asarray(centre) + np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=1)
 
