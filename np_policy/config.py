@@ -290,7 +290,8 @@ class TrainConfig:
             raise ConfigError(f"TrainConfig.site_recorded_share: expected a share in [0, 1], "
                               f"got {self.site_recorded_share!r}")
         if not (math.isfinite(self.train_margin_m) and self.train_margin_m >= 0.0):
-            raise ConfigError(f"TrainConfig.train_margin_m: expected a finite number >= 0 m, got {self.train_margin_m!r}")
+            raise ConfigError("TrainConfig.train_margin_m: expected a finite number >= 0 m, "
+                              f"got {self.train_margin_m!r}")
         if self.train_margin_m and self.env.collision != "footprint":
             raise ConfigError("TrainConfig.train_margin_m: a clearance margin needs env.collision 'footprint' (the "
                               f"reference-point convention has no body to grow), got {self.env.collision!r}")

@@ -140,12 +140,13 @@ class NeuralParkerPlanner:
             return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage="sampled")
         plan, stage = self._mean_rollout(scene, start), "mean"
         anytime = self.config.accept_mean_m is not None
-        if self.accept_implies_valid and self._accepted(scene, plan):
-            return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
-        if self.sampled is None or anytime:
+        test_first = self.accept_implies_valid  # an accepted mean rollout needs no claim check
+        if (self.sampled is None or anytime) and not test_first:
             plan = self._claimed(scene, plan)
-        if anytime and not self.accept_implies_valid and self._accepted(scene, plan):
+        if anytime and self._accepted(scene, plan):
             return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
+        if test_first:
+            plan = self._claimed(scene, plan)
         if self.sampled is not None:
             plan, stage = self._choose_claimed(scene, [plan, *self.sampled(scene, start)], anytime), "sampled"
         for rounds in self.rescue:

@@ -104,7 +104,8 @@ def sample_recorded_reset(rng: np.random.Generator, clips: Sequence[Clip], *, ve
     uniform App. C starts rarely are; training on the training clips' own starts puts those situations into the
     pool. A start whose footprint leaves the site, touches its boundary or a detection of the frame is drawn
     again, and so is a frame whose detections touch ``vehicle``'s footprint at the target (never the real
-    vehicle's on the recorded clips; a body grown by a training margin, `TrainConfig.train_margin_m`). Returns ``(scene, start_pose)``; RuntimeError after ``max_tries`` draws without a free start."""
+    vehicle's on the recorded clips; a body grown by a training margin, `TrainConfig.train_margin_m`). Returns
+    ``(scene, start_pose)``; RuntimeError after ``max_tries`` draws without a free start."""
     if not clips:
         raise ConfigError("sample_recorded_reset: expected at least one clip, got none")
     vehicle = VehicleSpec() if vehicle is None else vehicle

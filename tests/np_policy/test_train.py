@@ -448,8 +448,8 @@ def _clearance(scene, pose, vehicle):
 
     body = shapely.Polygon(vehicle.footprint(pose))
     lot = shapely.Polygon(scene.boundary)
-    obstacles = [shapely.Polygon(o.vertices) if hasattr(o, "vertices") else shapely.Point(*o.center).buffer(o.radius, 256)
-                 for o in scene.obstacles]
+    obstacles = [shapely.Polygon(o.vertices) if hasattr(o, "vertices")
+                 else shapely.Point(*o.center).buffer(o.radius, 256) for o in scene.obstacles]
     if not lot.contains(body) or any(o.intersects(body) for o in obstacles):
         return -1.0
     return min([lot.exterior.distance(body), *(o.distance(body) for o in obstacles)])
