@@ -29,8 +29,9 @@ CPU time estimated from the main job's recorded wall times, and runs nothing.
 Writes into the run folder (default ``results/robustness/<timestamp>/``): ``records.csv`` (one row per factor ×
 level × clip (episode) × planner: the closed-loop record columns plus factor, level, level_value, setting, seed),
 ``table.md``, ``plots/<factor>.png`` (footprint success and contact rate against the level, one line per planner,
-95 % Wilson bands), ``config.json`` and ``rrd/`` (the first failing clip of every factor × level × planner, driven
-again with a Rerun recording).
+95 % Wilson bands), ``config.json`` and ``rrd/`` (per factor × level × planner the first clip that fails there but
+passes undisturbed, else the level's first failure, driven again with a Rerun recording; ``python -m
+experiments.failure_review DIR`` reads them).
 """
 
 from __future__ import annotations
@@ -54,7 +55,7 @@ from experiments.closed_loop import (CLIP_SPLITS, PLANNERS, SITE_PLANNERS, Close
 from experiments.common import git_commit, run_folder
 from experiments.overrides import apply_overrides
 from experiments.registry import PlannerOptions, build_planners, check_names
-from experiments.robustness_report import factor_figure, format_table
+from experiments.robustness_report import factor_figure, failure_cases, format_table
 from experiments.robustness_sources import StartSpec, build_source, disturbance_at
 from experiments.scene_files import scene_file
 from experiments.track import PLANNERS as TRACK_PLANNERS
@@ -203,23 +204,21 @@ def run_jobs(jobs: list[tuple], names: list[str], spec, seed: int, log: RecordLo
 
 
 def record_failures(rows: list[dict], source, seed: int, folder: Path) -> list[Path]:
-    """Drive the first failing clip or episode (in ``source.units`` order) of every factor × level × planner again
-    with a Rerun recording, ``rrd/<factor>_<level>_<planner>_<unit>.rrd`` (kept when it exists: a resumed
-    study)."""
-    order = {name: k for k, name in enumerate(source.units)}
-    firsts: dict[tuple, str] = {}
-    for r in sorted(rows, key=lambda r: order[r[source.key]]):
-        if not int(r["footprint_success"]):
-            firsts.setdefault((r["factor"], r["level"], r["planner"]), r[source.key])
-    if not firsts:
+    """Drive the failure each disturbance caused (`experiments.robustness_report.failure_cases`: per factor × level
+    × planner the first clip or episode, in ``source.units`` order, that fails there but passes undisturbed, else
+    the level's first failure) again with a Rerun recording, ``rrd/<factor>_<level>_<planner>_<unit>.rrd`` (kept
+    when it exists: a resumed study)."""
+    cases = failure_cases(rows, source.units, source.key)
+    if not cases:
         return []
-    planners = build_planners(sorted({p for _, _, p in firsts}), source.options)
+    order = {name: k for k, name in enumerate(source.units)}
+    planners = build_planners(sorted({c.planner for c in cases}), source.options)
     written = []
-    for (factor, level, planner), unit in tqdm(sorted(firsts.items()), desc="recording first failures"):
-        path = folder / "rrd" / f"{factor}_{level}_{planner}_{unit.replace('#', '_')}.rrd"
+    for case in tqdm(cases, desc="recording failures"):
+        path = folder / "rrd" / f"{case.factor}_{case.level}_{case.planner}_{case.unit.replace('#', '_')}.rrd"
         if not path.exists():
             path.parent.mkdir(exist_ok=True)
-            source.record(order[unit], planners[planner], factor, level, seed, path)
+            source.record(order[case.unit], planners[case.planner], case.factor, case.level, seed, path)
         written.append(path)
     return written
 
@@ -290,7 +289,7 @@ def _parser() -> argparse.ArgumentParser:
                         help="continue the study in DIR with its stored settings (the other options but "
                              "--workers and --ray-address are ignored)")
     parser.add_argument("--dry-run", action="store_true", help="print the run count and CPU time; run nothing")
-    parser.add_argument("--no-rrd", action="store_true", help="no Rerun recordings of the first failures")
+    parser.add_argument("--no-rrd", action="store_true", help="no Rerun recordings of the failures")
     parser.add_argument("--set", nargs="+", action="extend", default=[], metavar="KEY=VALUE", dest="overrides",
                         help="any setting of experiments.closed_loop.ClosedLoopConfig by its dotted path")
     return parser
@@ -312,6 +311,12 @@ def _settings(args, argv: list[str]) -> tuple[argparse.Namespace, list[str]]:
     again.workers, again.ray_address, again.no_rrd = args.workers, args.ray_address, args.no_rrd
     again.resume, again.dry_run = args.resume, args.dry_run
     return again, saved
+
+
+def stored_study(folder: Path) -> argparse.Namespace:
+    """The arguments the study in ``folder`` ran with (its ``config.json``), as `main` resumes it; a ConfigError
+    when ``folder`` holds no study."""
+    return _settings(_parser().parse_args(["--resume", str(folder)]), [])[0]
 
 
 def _study_argv(argv: list[str]) -> list[str]:
@@ -396,7 +401,7 @@ def main(argv=None) -> dict[str, Any]:
     print(table)
     print(f"\n{len(rows)} runs ({sum(len(j[3]) for j in jobs)} now, {time.perf_counter() - start:.0f} s); results "
           f"in {folder}/: records.csv, table.md, config.json, plots/ ({len(plots)})"
-          + (f", rrd/ ({len(recordings)} first failures)" if recordings else ""))
+          + (f", rrd/ ({len(recordings)} failures)" if recordings else ""))
     return {"folder": folder, "rows": rows, "table": table, "plots": plots, "recordings": recordings}
 
 

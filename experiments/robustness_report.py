@@ -1,9 +1,10 @@
 """The outputs of the robustness study (`experiments.robustness`): rates with binomial confidence bands, the
-success-vs-level plots and ``table.md``."""
+success-vs-level plots, ``table.md`` and the choice of the runs it records (`failure_cases`)."""
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -115,3 +116,35 @@ def format_table(rows: list[dict], factors: list[str], planners: list[str], key:
                 failure_reasons(rows, factor, level, planner) for level in ("none", *LEVELS)) + " |")
         lines.append("")
     return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class FailureCase:
+    """The run of a factor × level × planner that the study drives again with a recording."""
+
+    factor: str
+    level: str
+    planner: str
+    unit: str
+    """The clip (or episode) name."""
+    fallback: bool
+    """True when no clip failed here while passing undisturbed: the level's first failure instead."""
+
+
+def failure_cases(rows: list[dict], units: list[str], key: str = "clip") -> list[FailureCase]:
+    """Per factor × level × planner with a failed run (footprint success 0) in ``rows``: the first unit in
+    ``units`` order that fails there but passes undisturbed (factor and level 'none') with the same planner, the
+    failure the disturbance caused; else the level's first failure (``fallback``; always so for the undisturbed
+    level). Sorted by factor, level, planner."""
+    order = {name: k for k, name in enumerate(units)}
+    passes = {(r["planner"], r[key]) for r in rows if r["factor"] == "none" and int(r["footprint_success"])}
+    failed: dict[tuple[str, str, str], list[str]] = {}
+    for r in rows:
+        if not int(r["footprint_success"]):
+            failed.setdefault((r["factor"], r["level"], r["planner"]), []).append(r[key])
+    cases = []
+    for (factor, level, planner), names in sorted(failed.items()):
+        names = sorted(names, key=order.__getitem__)
+        caused = [n for n in names if (planner, n) in passes]
+        cases.append(FailureCase(factor, level, planner, (caused or names)[0], fallback=not caused))
+    return cases

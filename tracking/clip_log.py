@@ -4,7 +4,11 @@ moving objects and the detections each planner call used.
 Extra entity paths (world frame, metres, timeline ``sim_time``):
 
 * ``world/scene/movers``: ground-truth outlines of the moving objects, every ``log_every`` control steps;
-* ``world/detections``: the five-vertex detections of the frame scene a planner call used, at that call;
+* ``world/detections``: the five-vertex detections of the frame scene a planner call used, at that call,
+  labelled with the detected object ('<kind> <id>', as `tracking.clip_run.object_of_geom` names it);
+* ``run/calls``: one text line per planner call, at its time, with a ``PlannerCall`` archetype holding its
+  ``frame``, ``success``, ``rejected`` (why the tracker refused a successful plan, '' if it did not) and
+  ``plan_time_s``;
 * ``run/clip`` (static text): the clip's name.
 """
 
@@ -40,11 +44,20 @@ class ClipRerunObserver(RerunObserver):
                                                                colors=[(200, 70, 150)],
                                                                labels=[m.name for m in self.movers]))
 
-    def log_detections(self, t: float, scene: Scene) -> None:
-        """The detections a planner call at sim time ``t`` saw."""
-        self.rec.set_time("sim_time", duration=t)
+    def log_call(self, call, scene: Scene, labels: list[str]) -> None:
+        """A planner call (`tracking.clip_run.PlanCall`) and the detections it saw (``scene``'s obstacles, named
+        by ``labels``), at the call's sim time. The drive starts at the time of the last usable call before it."""
+        self.rec.set_time("sim_time", duration=call.time_s)
         self.rec.log("world/detections", rr.LineStrips2D([_closed(o.vertices) for o in scene.obstacles],
-                                                         colors=[(0, 170, 200)]))
+                                                         colors=[(0, 170, 200)], labels=labels))
+        verdict = "usable plan" if call.usable else (call.rejected or "failed")
+        self.rec.log("run/calls", rr.TextLog(f"planner call on frame {call.frame}: {verdict} "
+                                             f"({call.plan_time_s:.2f} s)", level="INFO" if call.usable else "WARN"),
+                     rr.DynamicArchetype("PlannerCall", components={
+                         "frame": [call.frame], "success": [call.success], "rejected": [call.rejected],
+                         "plan_time_s": [call.plan_time_s]}))
+        if call.usable and not self.steps:
+            self.start_time_s = call.time_s
 
     def on_step(self, t, world, state, command, target_speed) -> None:
         super().on_step(t, world, state, command, target_speed)

@@ -282,7 +282,7 @@ class ReplanningLoop:
     State: ``calls`` (every planner call), ``followed`` (the plan the tracker follows and the vehicle's progress
     along it, None before the first usable plan), ``retry_at_s`` (no planner call before this sim time: set after a
     failed call) and ``previous_pose`` (the pose of the last replan decision, telling a standing vehicle).
-    ``log``: None or the run's `tracking.clip_log.ClipRerunObserver`, given the detections of every call.
+    ``log``: None or the run's `tracking.clip_log.ClipRerunObserver`, given every call and its detections.
     ``disturbance``: None or a `tracking.disturbance.Disturbance`, whose perception factors perturb each frame's
     detections; ``hooks``: None or its `tracking.disturbance.RunHooks` of this run, whose localisation error is
     added to the pose the planner gets (the standing test keeps the true displacement: wheel odometry)."""
@@ -315,13 +315,33 @@ class ReplanningLoop:
         frame = min(int(round(t / self.clip.frame_dt_s)), self.clip.n_frames - 1)
         if self.disturbance is None:
             return frame, perceived_scene(self.clip, frame, pose=pose, track_window=self.config.track_window)
+        return frame, self.clip.frame_scene(frame, pose=pose, detections=self.detections(frame))
+
+    def detections(self, frame: int) -> tuple[np.ndarray, np.ndarray]:
+        """Object ids (n,) and polygons (n, 5, 2) the perception reports at ``frame``, before the nearest ten are
+        kept: the held (or, with ``track_window`` > 1, tracked) detections, perturbed by a perception disturbance."""
         held = self.clip.detection_frame(frame)
         window = self.config.track_window
         ids, polygons = self.clip.detections(held) if window == 1 else tracked_detections(self.clip, frame, window)
+        if self.disturbance is None:
+            return ids, polygons
         target = shapely.Polygon(self.tracker.vehicle.footprint(self.clip.target))
         # seeded by the frame whose detections are held: a held detection keeps its perturbation
-        ids, polygons = self.disturbance.perceive(self.clip.name, held, ids, polygons, keep_clear=target)
-        return frame, self.clip.frame_scene(frame, pose=pose, detections=(ids, polygons))
+        return self.disturbance.perceive(self.clip.name, held, ids, polygons, keep_clear=target)
+
+    def detection_labels(self, frame: int, scene: Scene) -> list[str]:
+        """'<kind> <id>' of the object each obstacle of ``scene`` (planned in at ``frame``) is a detection of: the
+        detection of `detections` whose vertices it has (a scene obstacle drops repeated vertices)."""
+        ids, polygons = self.detections(frame)
+        labels = []
+        for obstacle in scene.obstacles:
+            gaps = np.linalg.norm(obstacle.vertices[None, :, None] - polygons[:, None], axis=-1).min(2).max(1)
+            k = int(np.argmin(gaps))
+            if gaps[k] > 1e-9:
+                raise RuntimeError(f"clip {self.clip.name} frame {frame}: an obstacle of the planner's scene is none "
+                                   f"of the frame's detections (nearest {gaps[k]:.3g} m off)")
+            labels.append(f"{self.clip.objects[int(ids[k])].kind} {int(ids[k])}")
+        return labels
 
     def sensed(self, pose: np.ndarray, t: float) -> np.ndarray:
         """The pose the vehicle believes it has at sim time ``t`` (``pose`` without a localisation error)."""
@@ -340,7 +360,7 @@ class ReplanningLoop:
         if not self.last_usable:
             self.retry_at_s = t + self.config.retry_period_s
         if self.log is not None:
-            self.log.log_detections(t, scene)
+            self.log.log_call(self.calls[-1], scene, self.detection_labels(frame, scene))
         if self.last_usable:
             if prefix is not None:
                 plan = StitchedPlan.join(prefix[0].plan, prefix[1], prefix[2], plan)

@@ -4,15 +4,23 @@ Entity paths:
 
 * ``world/scene/boundary``, ``world/scene/obstacles``, ``world/scene/target`` (static): the scene and the target
   footprint;
-* ``world/plan`` (on ``sim_time``: the first plan at 0, each replan at its time; never static, since static data
-  would hide every replan): the planned path per gear segment (forward green, reverse red);
-* ``world/vehicle/footprint``, ``world/vehicle/reference_point`` (on ``sim_time``): the chassis rectangle;
+* ``world/plan`` (on ``sim_time``: the first plan when the drive starts, each replan at its time; never static,
+  since static data would hide every replan): the planned path per gear segment (forward green, reverse red), with
+  a ``PlanPoses`` archetype carrying each sample's heading (``heading_rad``, the segments' samples one after the
+  other) and each segment's ``gear`` (+1 / −1);
+* ``world/vehicle/footprint``, ``world/vehicle/reference_point`` (on ``sim_time``): the rectangle of the body the
+  simulator drives (`tracking.config.PlantConfig.body`: longer than the planned `VehicleSpec` under a
+  ``body_length`` disturbance);
 * ``world/executed`` (static, at the end): the executed reference-point trajectory;
 * ``world/contacts`` (on ``sim_time``): chassis contact points, labelled with the touched geom;
 * ``controller/<name>`` (scalars on ``sim_time``): cross_track_m, heading_error_rad, steer_curvature_cmd,
   steer_curvature_ref, speed_mps, speed_target_mps;
 * ``camera/topdown``, ``camera/chase`` (JPEG frames on ``sim_time``) when rendering;
-* ``run/outcome`` (text log at the run's end time): success, reason and the tracking figures.
+* ``run/outcome`` (text log at the run's end time): success, reason and the tracking figures, with an
+  ``Outcome`` archetype holding them as values (``success``, ``reason``, ``final_pose``, ``final_error``,
+  ``cross_track_rms_m``, ``cross_track_max_m``, ``sim_time_s``, ``plans_used``).
+
+`tracking.rrd_read.read_run` reads a recording back.
 
 Every recording is named after its file (``<clip>_<planner>`` in a clip run) and carries the viewer layout
 `run_blueprint`; `merge_recordings` merges the recordings of several runs into one optimised file.
@@ -83,10 +91,16 @@ def run_blueprint() -> rrb.Blueprint:
 
 def log_outcome(rec: rr.RecordingStream, record, figures: str = "") -> None:
     """Log a run's outcome line (success, reason, detail, then ``figures``) to ``run/outcome`` at the run's end
-    time, on the timeline: the viewer's text-log view lists no static rows."""
+    time, on the timeline (the viewer's text-log view lists no static rows), and its figures as values (an
+    ``Outcome`` archetype, read back by `tracking.rrd_read`)."""
     rec.set_time("sim_time", duration=record.sim_time_s)
+    values = {"success": [bool(record.success)], "reason": [record.reason],
+              "final_pose": np.asarray(record.final_pose, float), "final_error": np.asarray(record.final_error, float),
+              "cross_track_rms_m": [record.cross_track_rms_m], "cross_track_max_m": [record.cross_track_max_m],
+              "sim_time_s": [record.sim_time_s], "plans_used": [record.plans_used]}
     rec.log("run/outcome", rr.TextLog(f"success={record.success} reason={record.reason or '-'} {record.detail} "
-                                      f"{figures}".rstrip(), level="INFO" if record.success else "WARN"))
+                                      f"{figures}".rstrip(), level="INFO" if record.success else "WARN"),
+            rr.DynamicArchetype("Outcome", components=values))
 
 
 def merge_recordings(files: list[Path], out: Path) -> Path:
@@ -123,6 +137,9 @@ class RerunObserver(RunObserver):
 
     def __init__(self, world, config: TrackerConfig, path: Path, render: bool):
         self.config, self.vehicle = config, config.vehicle
+        self.body = config.plant.body(config.vehicle)
+        self.start_time_s = 0.0
+        """Sim time the drive starts at (later than 0 after a vehicle waited for its first plan)."""
         path.parent.mkdir(parents=True, exist_ok=True)
         self.rec = rr.RecordingStream(APPLICATION_ID)
         self.rec.save(str(path), default_blueprint=run_blueprint())
@@ -150,7 +167,10 @@ class RerunObserver(RunObserver):
         self.rec.set_time("sim_time", duration=t)
         self.rec.log("world/plan", rr.LineStrips2D([seg.xy for seg in segments], radii=_PLAN_RADIUS_M,
                                                    colors=[_GEAR_COLORS[seg.gear] for seg in segments],
-                                                   draw_order=_PLAN_DRAW_ORDER))
+                                                   draw_order=_PLAN_DRAW_ORDER),
+                     rr.DynamicArchetype("PlanPoses", components={
+                         "heading_rad": np.concatenate([seg.theta for seg in segments]),
+                         "gear": np.array([seg.gear for seg in segments], np.int8)}))
 
     def on_start(self, world, plan, segments) -> None:
         scene, rec = world.scene, self.rec
@@ -161,8 +181,8 @@ class RerunObserver(RunObserver):
                 static=True)
         rec.log("world/scene/target", rr.LineStrips2D([_closed(self.vehicle.footprint(scene.target))],
                                                       colors=[(230, 180, 0)]), static=True)
-        self._log_plan(0.0, segments)
-        self._log_vehicle(0.0, world.pose())
+        self._log_plan(self.start_time_s, segments)
+        self._log_vehicle(self.start_time_s, world.pose())
         if self.renderer is not None:
             self.renderer.on_start(world, plan, segments)
 
@@ -171,7 +191,7 @@ class RerunObserver(RunObserver):
 
     def _log_vehicle(self, t: float, pose: np.ndarray) -> None:
         self.rec.set_time("sim_time", duration=t)
-        self.rec.log("world/vehicle/footprint", rr.LineStrips2D([_closed(self.vehicle.footprint(pose))],
+        self.rec.log("world/vehicle/footprint", rr.LineStrips2D([_closed(self.body.footprint(pose))],
                                                                 colors=[(230, 120, 20)]))
         self.rec.log("world/vehicle/reference_point", rr.Points2D([pose[:2]], radii=0.08))
 

@@ -6,7 +6,7 @@ import json
 import pytest
 
 from experiments.robustness import RecordLog, main, study_jobs
-from experiments.robustness_report import format_table, rates, wilson
+from experiments.robustness_report import FailureCase, failure_cases, format_table, rates, wilson
 from np_sim.clips import load_clips
 
 CLIP = "eval-1000016"
@@ -131,3 +131,21 @@ def test_mistakes_exit_2_with_one_error_line(argv, message, capsys):
     with pytest.raises(SystemExit) as exit_:
         main(argv)
     assert exit_.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_the_recorded_failure_is_the_first_clip_the_disturbance_made_fail():
+    # clip order c3, c1, c2 (not the rows' order nor the alphabet). Undisturbed, A fails c1 and B fails c2 and c3.
+    outcomes = {("none", "none", "A"): {"c1": 0, "c2": 1, "c3": 1}, ("none", "none", "B"): {"c1": 1, "c2": 0, "c3": 0},
+                ("latency", "mild", "A"): {"c1": 0, "c2": 0, "c3": 0},
+                ("latency", "mild", "B"): {"c1": 1, "c2": 0, "c3": 0},
+                ("latency", "severe", "A"): {"c1": 1, "c2": 1, "c3": 1},
+                ("friction", "mild", "B"): {"c1": 0, "c2": 1, "c3": 0}}
+    rows = [{"factor": f, "level": lv, "planner": p, "clip": c, "footprint_success": str(ok)}
+            for (f, lv, p), runs in outcomes.items() for c, ok in sorted(runs.items())]
+    cases = failure_cases(rows[::-1], ["c3", "c1", "c2"])
+    assert cases == [
+        FailureCase("friction", "mild", "B", "c1", fallback=False),  # c3 fails undisturbed too; c1 passes there
+        FailureCase("latency", "mild", "A", "c3", fallback=False),  # c1 fails undisturbed; c3 comes before c2
+        FailureCase("latency", "mild", "B", "c3", fallback=True),  # c2 and c3 fail undisturbed: the first failure
+        FailureCase("none", "none", "A", "c1", fallback=True),
+        FailureCase("none", "none", "B", "c3", fallback=True)]  # latency severe: nothing failed, nothing recorded

@@ -148,7 +148,8 @@ def test_paper_plan_recognises_the_shipped_runs():
     for added in ("none", "vertices"):  # the HOPE-style backbones of Table III, trained by hope_policy.train
         backbone = runs[f"topology_hope_{added}_seed0"]
         assert backbone.config.trainer == "hope_policy.train" and backbone.epochs == 10_000
-        assert backbone.output.name == "final.pt" and states[backbone.name].kind == "not started"
+        assert backbone.output.name == "final.pt"
+        assert states[backbone.name].kind in ("not started", "interrupted", "training now", "finished")
     hope = runs["factorial_hope_seed0"]  # trained by hope_policy.train, progress counted in episodes
     assert hope.config.trainer == "hope_policy.train" and hope.epochs == 10_000
     assert states["factorial_hope_seed0"].kind in ("not started", "interrupted", "training now", "finished")
