@@ -1,4 +1,5 @@
-"""Shared assertion for the CLI error tests: a user's mistake ends in exit status 2 and one ``error:`` line."""
+"""Shared assertions for the CLI tests: a user's mistake ends in exit status 2 and one ``error:`` line; ``--help``
+exits 0."""
 
 import pytest
 
@@ -13,3 +14,11 @@ def one_error_line(capsys, main, argv: list[str]) -> str:
     assert len(lines) == 1, err
     assert "Traceback" not in err
     return lines[0]
+
+
+def help_text(capsys, main) -> str:
+    """Run ``main(["--help"])``, require exit status 0 and return what it printed."""
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--help"])
+    assert exit_info.value.code == 0
+    return capsys.readouterr().out
