@@ -1,8 +1,8 @@
 """NeuralParker rollouts, batched, and best-of-N: a cost-based choice among sampled ones (beyond the paper).
 
 ``PolicyRollouts`` runs ``n`` rollouts of a policy from one start in one batched environment (``BatchCore``, one
-compiled step for all of them), with the env's own arcs, checks, heading gate, connector and arc budget, so every
-rollout is a plan the env would accept. With ``std`` zero each arc is the compiled mean action ``μ(o)``: the
+compiled step for those still running), with the env's own arcs, checks, heading gate, connector and arc budget, so
+every rollout is a plan the env would accept. With ``std`` zero each arc is the compiled mean action ``μ(o)``: the
 paper's planner (§III-A) is the batch of one. Otherwise each arc is drawn as ``clip(μ(o) + σ ⊙ ε, −1, 1)`` with
 ``σ`` the policy's learned standard deviation (or a multiple of it) and ``ε ~ N(0, I)`` from a generator seeded per
 call, so the same query always gives the same plans; with ``first_arc='uniform'`` each rollout's first arc is
@@ -109,16 +109,14 @@ class PolicyRollouts:
         arcs: list[list[np.ndarray]] = [[] for _ in rows]
         plans: list[Plan | None] = [None] * self.n
         alive = np.ones(self.n, bool)
-        actions = np.zeros((self.n, 2))
         first = True
         while alive.any():
             live = np.flatnonzero(alive)
-            actions[live] = self._actions(core.obs[live], rng, first)
+            actions = np.asarray(self._actions(core.obs[live], rng, first), np.float64)
             first = False
-            actions[~alive] = 0.0
-            core.step(actions)
-            for row in live:
-                arcs[row].append(actions[row] * scale)
+            core.step(actions, live)  # finished rollouts are not stepped
+            for row, action in zip(live, actions):
+                arcs[row].append(action * scale)
                 if core.R[row, K.R_TERMINATED] > 0 or core.R[row, K.R_TRUNCATED] > 0:
                     reason = end_reason(core, row)
                     plans[row] = Plan(start=start, arcs=np.array(arcs[row]).reshape(-1, 2),

@@ -77,6 +77,20 @@ def checked_actions(actions, num_envs: int) -> np.ndarray:
     return a
 
 
+def checked_rows(rows, num_envs: int) -> np.ndarray:
+    """``rows`` as a 1-D int64 array of distinct env indices in [0, ``num_envs``); ValueError otherwise (one env
+    stepped twice in a parallel loop would race)."""
+    r = np.asarray(rows)
+    if r.ndim != 1 or (len(r) and not np.issubdtype(r.dtype, np.integer)):
+        raise ValueError(f"step: expected rows as a 1-D array of env indices, got shape {r.shape} and dtype {r.dtype}")
+    r = np.ascontiguousarray(r, np.int64)
+    if len(r) and (r.min() < 0 or r.max() >= num_envs):
+        raise ValueError(f"step: rows must lie in [0, {num_envs}), got {int(r.min())}..{int(r.max())}")
+    if len(np.unique(r)) != len(r):
+        raise ValueError("step: rows must be distinct (each env is stepped at most once per call)")
+    return r
+
+
 def step_outcome(R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(reward as float32, terminated, truncated) of a batched step's result rows ``R``, whose first columns are
     ``K.R_REWARD``, ``K.R_TERMINATED`` and ``K.R_TRUNCATED`` (the benchmark env's and the adapted HOPE's kernels)."""
@@ -164,15 +178,19 @@ class BatchCore:
         self.observe_nearest(env_ids)
         self.observe_bev(env_ids)
 
-    def step(self, actions: np.ndarray) -> None:
-        """Advance every env by its normalised action row; fills ``obs`` and ``R``."""
-        a = checked_actions(actions, self.num_envs)
-        K.step_batch(self.geo, self.arrays.targets, self.static_obs, self.S, self.P, np.ascontiguousarray(a),
-                     self.local, self.b_ranges, self.off_c, self.off_s, self.offsets, self.headings, self.scales0,
-                     self.scales1, self.basis, self.dbasis, self.h_pts, self.h_kbar_max, self.h_dk, self.h_len,
-                     self.h_cost, self.obs, self.R)
-        self.observe_nearest(self._all)
-        self.observe_bev(self._all)
+    def step(self, actions: np.ndarray, rows=None) -> None:
+        """Advance every env by its normalised action row, or with ``rows`` (distinct env indices) only those envs,
+        env ``rows[r]`` by ``actions[r]``; fills their rows of ``obs`` and ``R``. The other envs are not stepped:
+        their state, observation, results and Hermite scratch stay as they were (a finished rollout costs
+        nothing)."""
+        rows = self._all if rows is None else checked_rows(rows, self.num_envs)
+        a = checked_actions(actions, len(rows))
+        K.step_rows(self.geo, self.arrays.targets, self.static_obs, self.S, self.P, rows, np.ascontiguousarray(a),
+                    self.local, self.b_ranges, self.off_c, self.off_s, self.offsets, self.headings, self.scales0,
+                    self.scales1, self.basis, self.dbasis, self.h_pts, self.h_kbar_max, self.h_dk, self.h_len,
+                    self.h_cost, self.obs, self.R)
+        self.observe_nearest(rows)
+        self.observe_bev(rows)
 
     def observe_nearest(self, env_ids: np.ndarray) -> None:
         """Obstacle slots of the envs ``env_ids`` whose scene exceeds the slots: the nearest obstacles to their

@@ -45,14 +45,39 @@ def point_valid(geo, k: int, px: float, py: float) -> bool:
 
 
 @njit(cache=True, error_model="numpy")
+def rect_inside_boundary(corners: np.ndarray, verts: np.ndarray, n: int) -> bool:
+    """The closed rectangle ``corners`` (4, 2) lies strictly inside the simple polygon ``verts[:n]``: every corner
+    INSIDE and no rectangle edge touching a polygon edge.
+
+    When no polygon edge's bounding box meets the rectangle's (closed boxes), no polygon edge can touch the
+    rectangle, so the rectangle (connected) lies wholly inside or wholly outside and its first corner's
+    point-in-polygon test decides (exact); otherwise every corner and every pair of edges is tested."""
+    xmin = min(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0])
+    xmax = max(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0])
+    ymin = min(corners[0, 1], corners[1, 1], corners[2, 1], corners[3, 1])
+    ymax = max(corners[0, 1], corners[1, 1], corners[2, 1], corners[3, 1])
+    near = False
+    j = n - 1
+    for i in range(n):
+        if (max(verts[i, 0], verts[j, 0]) >= xmin and min(verts[i, 0], verts[j, 0]) <= xmax
+                and max(verts[i, 1], verts[j, 1]) >= ymin and min(verts[i, 1], verts[j, 1]) <= ymax):
+            near = True
+            break
+        j = i
+    if not near:
+        return point_in_polygon(corners[0, 0], corners[0, 1], verts, n) == INSIDE
+    for i in range(4):
+        if point_in_polygon(corners[i, 0], corners[i, 1], verts, n) != INSIDE:
+            return False
+    return not polygon_edges_cross(corners, 4, verts, n)
+
+
+@njit(cache=True, error_model="numpy")
 def footprint_valid(geo, k: int, x: float, y: float, th: float, local: np.ndarray, corners: np.ndarray) -> bool:
     """Footprint convention for the vehicle rectangle ``local`` (4, 2) at pose (x, y, θ); ``corners`` is scratch."""
     boundary, n_boundary, poly, poly_nv, n_poly, aabb, circle, n_circle = geo[0], geo[1], geo[2], geo[3], geo[4], geo[5], geo[6], geo[7]
     footprint_corners(x, y, th, local, corners)
-    for i in range(4):
-        if point_in_polygon(corners[i, 0], corners[i, 1], boundary[k], n_boundary[k]) != INSIDE:
-            return False
-    if polygon_edges_cross(corners, 4, boundary[k], n_boundary[k]):
+    if not rect_inside_boundary(corners, boundary[k], n_boundary[k]):
         return False
     xmin = min(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0])
     xmax = max(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0])

@@ -1,4 +1,5 @@
-"""The batched environment step and observation, compiled (one call steps every env; ``prange`` over envs).
+"""The batched environment step and observation, compiled (one call steps every env, or a chosen subset of them;
+``prange`` over envs).
 
 The per-env logic follows Algorithm 1 of the paper: execute the arc (eq:arc) checked at ``samples_per_arc``
 points, step reward (eq:step-reward), failure, direct terminal success, else the gated Hermite connector
@@ -202,14 +203,17 @@ def step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, 
 
 
 @njit(parallel=True, cache=True, error_model="numpy")
-def step_batch(geo, targets, static_obs, S, P, actions, local, b_ranges, off_c, off_s, offsets, headings, scales0,
-               scales1, basis, dbasis, pts, kbar_max, dk, lengths, costs, obs, R) -> None:
-    """Step every env by its normalised action row (a_0, a_1) ∈ [−1, 1]², mapped to κ = a_0·κ_max, l = a_1·l_max.
+def step_rows(geo, targets, static_obs, S, P, rows, actions, local, b_ranges, off_c, off_s, offsets, headings, scales0,
+              scales1, basis, dbasis, pts, kbar_max, dk, lengths, costs, obs, R) -> None:
+    """Step the envs ``rows`` (distinct indices), env ``rows[r]`` by the normalised action row ``actions[r]`` =
+    (a_0, a_1) ∈ [−1, 1]², mapped to κ = a_0·κ_max, l = a_1·l_max; every other env's rows of ``S``, ``obs``, ``R``
+    and the scratch stay untouched.
 
     ``pts``, ``kbar_max``, ``dk``, ``lengths``, ``costs`` are per-env Hermite scratch (leading axis = env).
     """
-    for i in prange(S.shape[0]):
-        kappa = actions[i, 0] * P[P_KAPPA_MAX]
-        length = actions[i, 1] * P[P_LENGTH_MAX]
+    for r in prange(rows.shape[0]):
+        i = rows[r]
+        kappa = actions[r, 0] * P[P_KAPPA_MAX]
+        length = actions[r, 1] * P[P_LENGTH_MAX]
         step_one(geo, targets, static_obs, S, P, i, kappa, length, local, b_ranges, off_c, off_s, offsets, headings,
                  scales0, scales1, basis, dbasis, pts[i], kbar_max[i], dk[i], lengths[i], costs[i], obs[i], R[i])

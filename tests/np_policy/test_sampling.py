@@ -10,8 +10,11 @@ from np_policy.config import NeuralParkerConfig as Config
 from np_policy.planner import NeuralParkerPlanner
 from np_policy.sampling import (ChoiceWeights, PolicyRollouts, choose, clearance_level, cost_lower_bound, drive_length,
                                 plan_cost)
+from np_sim.env_core import BatchCore
 from np_sim.errors import ConfigError
 from np_sim.clips import load_clips
+from np_sim.frames import from_target_frame
+from np_sim.kernels import step as K
 from np_sim.kinematics import arc_step
 from np_sim.plan import Plan
 from np_sim.scene import PolygonObstacle, Scene
@@ -280,3 +283,53 @@ def test_the_mean_rollout_is_the_batch_of_one_and_matches_a_plain_env_loop(probl
             np.testing.assert_array_equal(row.arcs, plan.arcs)
             assert (row.success, row.reason) == (plan.success, plan.reason)
     assert {p.success for p in (sampled._mean_rollout(s, q) for s, q in cases)} == {True, False}
+
+
+def _rollouts_stepping_every_row(rollouts: PolicyRollouts, scene, start) -> list[tuple]:
+    """(arcs, success, reason, Hermite points) per rollout by the loop that steps every env of a fresh batched
+    core each step, finished ones with a zero action, drawing the same noise (the live rows' in row order)."""
+    core = BatchCore([scene], rollouts.n, rollouts.config, None, nearest=rollouts.nearest)
+    rng = np.random.default_rng(rollouts.seed)
+    core.reset_envs(np.arange(rollouts.n), rng, 0, start)
+    scale = np.array([rollouts.config.vehicle.kappa_max, rollouts.config.episode.max_length_m])
+    arcs, ends, alive, first = [[] for _ in range(rollouts.n)], [None] * rollouts.n, np.ones(rollouts.n, bool), True
+    while alive.any():
+        live = np.flatnonzero(alive)
+        actions = np.zeros((rollouts.n, 2))
+        actions[live] = rollouts._actions(core.obs[live], rng, first)
+        first = False
+        core.step(actions)
+        for row in live:
+            arcs[row].append(actions[row] * scale)
+            if core.R[row, K.R_TERMINATED] > 0 or core.R[row, K.R_TRUNCATED] > 0:
+                h = int(core.R[row, K.R_HERMITE])
+                ends[row] = (bool(core.R[row, K.R_SUCCESS]), None if h < 0 else core.h_pts[row, h].copy())
+                alive[row] = False
+    return [(np.array(a), *end) for a, end in zip(arcs, ends)]
+
+
+def test_rollouts_step_only_the_live_rows_and_equal_stepping_every_row(problem, sampled, monkeypatch):
+    """A finished rollout is not stepped again (the envs stepped add up to the arcs played), and the plans are
+    those of stepping every env every step, bit for bit: arcs, outcomes and Hermite samples."""
+    scene, start = problem
+    rollouts = sampled.sampled
+    stepped = []
+    step = BatchCore.step
+
+    def counting_step(core, actions, rows=None):
+        stepped.append(core.num_envs if rows is None else len(rows))
+        return step(core, actions, rows)
+
+    monkeypatch.setattr(BatchCore, "step", counting_step)
+    plans = rollouts(scene, start)
+    monkeypatch.undo()
+    lengths = [len(p.arcs) for p in plans]
+    assert len(set(lengths)) > 1 and sum(stepped) == sum(lengths) < len(stepped) * rollouts.n
+    reference = _rollouts_stepping_every_row(rollouts, scene, start)
+    for plan, (arcs, success, hermite) in zip(plans, reference):
+        np.testing.assert_array_equal(plan.arcs, arcs)
+        assert plan.success == success
+        if hermite is None:
+            assert plan.hermite is None
+        else:
+            np.testing.assert_array_equal(plan.hermite.points, from_target_frame(hermite.T, scene.target))

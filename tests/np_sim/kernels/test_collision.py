@@ -14,14 +14,18 @@ Several scenes of different sizes are packed together so that the scene index an
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 import pytest
 import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from shapely.geometry import Point, Polygon
 
-from np_sim.kernels.collision import footprint_valid, point_valid, pose_valid, poses_valid
+from np_sim.kernels.collision import footprint_valid, point_valid, pose_valid, poses_valid, rect_inside_boundary
+from np_sim.kernels.geometry import footprint_corners
 from np_sim.scene import PolygonObstacle, Scene
 from np_sim.scene_arrays import pack_scenes
 from np_sim.vehicle import VehicleSpec
@@ -249,3 +253,92 @@ def test_exact_touching_is_a_collision():
     assert not point_valid(geo, 0, 8.0, 9.0) and not oracle_point(circ, 8.0, 9.0)
     assert point_valid(geo, 0, 8.0, 9.0 + 1e-9) and oracle_point(circ, 8.0, 9.0 + 1e-9)
     assert not point_valid(geo, 0, -30.0, 0.0) and not point_valid(geo, 0, -30.0, -30.0)  # on the boundary
+
+
+# --- the body rectangle against a non-convex lot: the bounding-box shortcut of rect_inside_boundary -----------------
+
+NOTCHED = np.array([[0.0, 0.0], [40.0, 0.0], [46.0, 12.0], [40.0, 24.0], [26.0, 24.0], [26.0, 10.0], [14.0, 10.0],
+                    [14.0, 24.0], [0.0, 24.0]])
+"""A 46 × 24 m lot with a slanted right side and a 12 × 14 m rectangular notch cut from its top edge (outside the
+lot, inside its bounding box)."""
+SLANTED = ((1, 2), (2, 3))
+"""Vertex pairs of NOTCHED's slanted edges."""
+
+
+def _corners(pose) -> np.ndarray:
+    corners = np.empty((4, 2))
+    footprint_corners(float(pose[0]), float(pose[1]), float(pose[2]), LOCAL, corners)
+    return corners
+
+
+def _some_edge_box_meets(corners: np.ndarray, verts: np.ndarray) -> bool:
+    """Whether some edge's bounding box meets the rectangle's (numpy): the shortcut is not taken."""
+    a, b = verts, np.roll(verts, -1, axis=0)
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    return bool(np.any(np.all((hi >= corners.min(axis=0)) & (lo <= corners.max(axis=0)), axis=1)))
+
+
+@functools.lru_cache(maxsize=1)
+def _notched_geometry():
+    return pack_scenes([Scene.from_dict({"boundary": NOTCHED.tolist(), "obstacles": [],
+                                         "target": [7.0, 6.0, 0.0]})]).geometry
+
+
+def _check_notched(poses) -> tuple[int, int]:
+    """Asserts the kernel (alone and inside ``footprint_valid`` on the obstacle-free lot) equals shapely's
+    ``contains_properly`` at every pose; returns how many poses took the shortcut and how many did not."""
+    boundary = Polygon(NOTCHED)
+    scratch = np.empty((4, 2))
+    counts = [0, 0]
+    for pose in poses:
+        corners = _corners(pose)
+        want = boundary.contains_properly(Polygon(SPEC.footprint(pose)))
+        assert bool(rect_inside_boundary(corners, NOTCHED, len(NOTCHED))) == want, pose
+        assert bool(footprint_valid(_notched_geometry(), 0, *map(float, pose), LOCAL, scratch)) == want, pose
+        counts[_some_edge_box_meets(corners, NOTCHED)] += 1
+    return counts[0], counts[1]
+
+
+def _poses_around(rng, centres, n: int) -> np.ndarray:
+    xy = np.repeat(np.asarray(centres, float), n, axis=0) + rng.uniform(-0.5, 0.5, (n * len(centres), 2))
+    return np.column_stack([xy, rng.uniform(-math.pi, math.pi, len(xy))])
+
+
+def test_bodies_far_inside_and_far_outside_a_notched_lot_take_the_shortcut_and_match_shapely():
+    """Far from every edge (inside the lot, in the notch, beyond the lot) no edge's box meets the body's: one
+    corner decides, and the answer is shapely's, both ways."""
+    rng = np.random.default_rng(11)
+    inside = _poses_around(rng, [(7.0, 5.0), (34.0, 12.0), (20.0, 4.5), (6.0, 18.0)], 25)
+    outside = _poses_around(rng, [(20.0, 18.0), (60.0, 12.0), (-10.0, -10.0), (20.0, 40.0)], 25)
+    assert _check_notched(inside) == (len(inside), 0)
+    assert _check_notched(outside) == (len(outside), 0)
+    scratch = np.empty((4, 2))
+    assert all(footprint_valid(_notched_geometry(), 0, *p, LOCAL, scratch) for p in inside)
+    assert not any(footprint_valid(_notched_geometry(), 0, *p, LOCAL, scratch) for p in outside)  # notch: outside
+
+
+def test_bodies_near_and_across_slanted_edges_match_shapely():
+    """Reference points within 4 m of a slanted edge, on either side, at every heading: the body touches, crosses
+    or clears the edge (the full test), and sometimes a corner sticks out while the reference point is inside."""
+    rng = np.random.default_rng(12)
+    poses = []
+    for i, j in SLANTED:
+        a, b = NOTCHED[i], NOTCHED[j]
+        normal = np.array([b[1] - a[1], a[0] - b[0]]) / np.hypot(*(b - a))  # outward (the ring is anticlockwise)
+        t = rng.uniform(0.0, 1.0, 150)
+        d = rng.uniform(-4.0, 4.0, 150)
+        xy = a + t[:, None] * (b - a) + d[:, None] * normal
+        poses.append(np.column_stack([xy, rng.uniform(-math.pi, math.pi, 150)]))
+    poses = np.concatenate(poses)
+    shortcut, full = _check_notched(poses)
+    assert full > 200
+    outcomes = [Polygon(NOTCHED).contains_properly(Polygon(SPEC.footprint(p))) for p in poses]
+    inside_ref = [Polygon(NOTCHED).contains(Point(p[0], p[1])) for p in poses]
+    assert any(outcomes) and not all(outcomes)
+    assert any(ref and not ok for ref, ok in zip(inside_ref, outcomes))
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.floats(-10.0, 56.0), st.floats(-10.0, 34.0), st.floats(-math.pi, math.pi))
+def test_random_poses_against_a_notched_lot_match_shapely(x, y, th):
+    _check_notched([(x, y, th)])
