@@ -1,8 +1,9 @@
 """Manifest of the shipped checkpoints: for each file, the training run it came from and its SHA-256.
 
 ``checkpoints/MANIFEST.json`` lists every ``.pt`` file under ``checkpoints/`` except the runs' ``snapshot.pt``
-files and the ``best.pt`` of runs that can still be resumed (they hold a ``snapshot.pt``, so their ``best.pt``
-changes when training goes on; those runs are listed by folder under ``resumable_runs``). Each entry records:
+files, an unfinished autoencoder pretraining's ``<name>.snapshot.pt`` and the ``best.pt`` of runs that can still be
+resumed (they hold a ``snapshot.pt``, so their ``best.pt`` changes when training goes on; those runs are listed by
+folder under ``resumable_runs``). Each entry records:
 
 - ``run``: the run folder (``checkpoints/runs/<run>``) whose ``best.pt`` the file is or is a copy of — a copy is
   found by the SHA-256 of its bytes, else by equal weights and epoch (``copy_of`` names that ``best.pt``);
@@ -54,7 +55,8 @@ def shipped_files(root: Path) -> list[Path]:
     """Every ``.pt`` under ``root`` except snapshots and the ``best.pt`` of runs still holding a snapshot."""
     resumable = {run for run in run_folders(root) if (run / "snapshot.pt").exists()}
     return sorted(p for p in root.rglob("*.pt")
-                  if p.name != "snapshot.pt" and not (p.name == "best.pt" and p.parent in resumable))
+                  if p.name != "snapshot.pt" and not p.name.endswith(".snapshot.pt")  # a pretraining's snapshot
+                  and not (p.name == "best.pt" and p.parent in resumable))
 
 
 def _same_weights(a: dict[str, Any], b: dict[str, Any]) -> bool:

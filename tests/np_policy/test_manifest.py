@@ -18,7 +18,8 @@ CHECKPOINTS = Path(__file__).resolve().parents[2] / "checkpoints"
 def _expected_shipped(root):
     """Every .pt under ``root`` but snapshots and the best.pt of folders that still hold a snapshot."""
     return {p.relative_to(root.parent).as_posix() for p in root.rglob("*.pt")
-            if p.name != "snapshot.pt" and not (p.name == "best.pt" and (p.parent / "snapshot.pt").exists())}
+            if p.name != "snapshot.pt" and not p.name.endswith(".snapshot.pt")
+            and not (p.name == "best.pt" and (p.parent / "snapshot.pt").exists())}
 
 
 def test_the_committed_manifest_matches_the_committed_files():
