@@ -247,6 +247,14 @@ def planner_notes(names: list[str], config: ClosedLoopConfig) -> list[str]:
         when = (f"none of them succeeds or the best keeps less than {footprint.rescue_clearance_m:g} m clearance"
                 if footprint.rescue_clearance_m > 0 else "none of them succeeds")
         notes.append(f"When {when} it samples {rounds} (planner.neuralparker_footprint.rescue).")
+        if footprint.rescue_stop_m is not None and len(footprint.rescue) > 1:
+            keeps = f" and keeps {footprint.rescue_stop_m:g} m clearance" if footprint.rescue_stop_m > 0 else ""
+            notes.append(f"After a rescue round the later ones are skipped once the chosen plan succeeds{keeps} "
+                         f"(planner.neuralparker_footprint.rescue_stop_m).")
+    if footprint.rollout_max_arcs is not None and (footprint.samples or footprint.rescue):
+        notes.append(f"NeuralParker (footprint)'s sampled and rescue rollouts end as timeouts after "
+                     f"{footprint.rollout_max_arcs} arcs, its mean rollout at the policy env's budget "
+                     f"(planner.neuralparker_footprint.rollout_max_arcs).")
     if footprint.connector:
         notes.append(f"NeuralParker (footprint)'s terminal connector: {footprint.connector} "
                      f"(centred = the fixed nine candidates, target-aligned first).")

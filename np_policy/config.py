@@ -397,8 +397,9 @@ class NeuralParkerConfig:
     The mean rollout alone (``samples=0``, no rescue rounds) is the paper's planner. ``samples`` adds that many
     seeded sampled rollouts and returns the best by ``weights`` (`np_policy.sampling.choose`); each rescue round
     ``(n, scale, first_arc)`` runs, in order, only while no rollout so far has succeeded (or, with
-    ``rescue_clearance_m``, the chosen plan keeps less clearance than that): ``n`` more rollouts at the policy's
-    standard deviation times ``scale``, their first arc drawn by the policy or uniformly over the action box."""
+    ``rescue_clearance_m``, the chosen plan keeps less clearance than that; after the first round, than
+    ``rescue_stop_m`` when set): ``n`` more rollouts at the policy's standard deviation times ``scale``, their first
+    arc drawn by the policy or uniformly over the action box; ``rollout_max_arcs`` bounds every sampled rollout."""
 
     connector: str | None = None
     """Terminal connector: 'fixed', 'ensemble' or 'centred' replaces the checkpoint's
@@ -415,6 +416,15 @@ class NeuralParkerConfig:
     rescue_clearance_m: float = 0.0
     """The rescue rounds also run while the chosen plan's clearance level (the ``weights.margins_m`` ladder) is
     below this (m); 0 = only after a failure."""
+    rescue_stop_m: float | None = None
+    """After a rescue round the remaining rounds are skipped once the chosen plan succeeds and keeps this clearance
+    level (m, at most ``rescue_clearance_m``; 0 = any validated plan): a bound on the rounds of a call whose first
+    rescue round found a plan. None = the later rounds run on the first round's rule, ``rescue_clearance_m``."""
+    rollout_max_arcs: int | None = None
+    """Arc budget of the ``samples`` rollouts and the rescue rounds' (at most the checkpoint env's
+    ``episode.max_arcs``): one still running after this many arcs ends as a timeout, so they step at most
+    (``samples`` + the rescue rounds' rollouts) × this many envs per call. None = the env's budget (200 arcs for
+    the site checkpoints), which the mean rollout always keeps."""
     accept_mean_m: float | None = None
     """Anytime play: the mean rollout is returned at once, before any sampling, when it succeeds, passes the
     validation, is steerable (``weights.curvature_tolerance``) and keeps its footprint grown by this (m) off every
@@ -447,12 +457,20 @@ class NeuralParkerConfig:
         if self.action == "sample" and (self.samples or self.rescue):
             raise ConfigError(f"NeuralParkerConfig.action: 'sample' plays one sampled rollout; it does not combine "
                               f"with samples ({self.samples}) or rescue rounds ({list(self.rescue)})")
-        for name in ("rescue_clearance_m", "margin_m", "accept_mean_m"):
+        for name in ("rescue_clearance_m", "margin_m", "accept_mean_m", "rescue_stop_m"):
             value = getattr(self, name)
-            if value is None and name == "accept_mean_m":
+            if value is None and name in ("accept_mean_m", "rescue_stop_m"):
                 continue
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ConfigError(f"NeuralParkerConfig.{name}: expected a finite number >= 0 m, got {value!r}")
+        if self.rescue_stop_m is not None and self.rescue_stop_m > self.rescue_clearance_m:
+            raise ConfigError(f"NeuralParkerConfig.rescue_stop_m: expected at most rescue_clearance_m "
+                              f"({self.rescue_clearance_m:g} m), got {self.rescue_stop_m!r}")
+        if self.rollout_max_arcs is not None and (isinstance(self.rollout_max_arcs, bool)
+                                                  or not isinstance(self.rollout_max_arcs, int)
+                                                  or self.rollout_max_arcs < 1):
+            raise ConfigError(f"NeuralParkerConfig.rollout_max_arcs: expected an integer >= 1 or None, got "
+                              f"{self.rollout_max_arcs!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ConfigError(f"NeuralParkerConfig.seed: expected an integer >= 0, got {self.seed!r}")
 
@@ -495,11 +513,15 @@ rescue for clearance below 0.2 m 0.89 (0.1 m: 0.91 vs 0.93 with ``--set clip_run
 clip_run.track_window=5``); the third round with uniform first arcs 0.90 (64 rollouts or 2 σ: 0.89).
 ``docs/planners.md`` has the whole table."""
 
-FOOTPRINT_ANYTIME = dataclasses.replace(FOOTPRINT_BEST_OF_N, accept_mean_m=FOOTPRINT_BEST_OF_N.weights.wanted_margin_m)
+FOOTPRINT_ANYTIME = dataclasses.replace(FOOTPRINT_BEST_OF_N, accept_mean_m=FOOTPRINT_BEST_OF_N.weights.wanted_margin_m,
+                                        rollout_max_arcs=50)
 """The footprint best-of-N planner played anytime: the mean rollout is returned at once when it succeeds, passes
 the validation, is steerable and keeps the choice's wanted margin (0.2 m) off every obstacle; otherwise the answer
-is 'footprint_best_of_n''s. The acceptance margin is the choice's own wanted clearance, not a tuned number: a
-mean rollout that keeps it already costs no clearance term, so sampling could only shorten it."""
+is 'footprint_best_of_n''s with its sampled and rescue rollouts cut at 50 arcs. The acceptance margin is the
+choice's own wanted clearance, not a tuned number: a mean rollout that keeps it already costs no clearance term, so
+sampling could only shorten it. The arc budget bounds a call at 416 rollouts × 50 arcs (the env's own budget is
+200): on the 94 difficult training clips it changed no run, on the ten training clips with the slowest runs of the
+next 210 it parked one more and cut their planning time by 43 % (docs/best_of_n.md, 2026-12-03)."""
 
 PRESETS: dict[str, NeuralParkerConfig] = {"paper": PAPER, "footprint_best_of_n": FOOTPRINT_BEST_OF_N,
                                           "footprint_anytime": FOOTPRINT_ANYTIME}

@@ -37,6 +37,7 @@ from np_policy.network import ActorCritic
 from np_policy.sampling import PolicyRollouts, choose, clearance_covers_sweep, clearance_level, steerable
 from np_sim.collision import path_valid
 from np_sim.config import EnvConfig
+from np_sim.errors import ConfigError
 from np_sim.plan import Plan
 from np_sim.scene import Scene
 from np_sim.validate import validation_failure
@@ -76,6 +77,18 @@ class Policy:
         return cls(model, config)
 
 
+def rollout_env(env: EnvConfig, max_arcs: int | None) -> EnvConfig:
+    """The env of the sampled and rescue rollouts: ``env`` with its arc budget cut to ``max_arcs`` (None keeps
+    it; `NeuralParkerConfig.rollout_max_arcs`). A rollout ends as a timeout at the budget and nothing else in the
+    env depends on it, so every rollout that ends within ``max_arcs`` arcs is the same plan as under ``env``."""
+    if max_arcs is None:
+        return env
+    if max_arcs > env.episode.max_arcs:
+        raise ConfigError(f"NeuralParkerConfig.rollout_max_arcs: expected at most the policy env's arc budget "
+                          f"(episode.max_arcs = {env.episode.max_arcs}), got {max_arcs}")
+    return dataclasses.replace(env, episode=dataclasses.replace(env.episode, max_arcs=max_arcs))
+
+
 def planning_env(policy: Policy, config: NeuralParkerConfig) -> EnvConfig:
     """The env the rollouts play: the policy's, its connector replaced by ``config.connector`` and, with
     ``config.margin_m``, its footprint grown by that much (the choice's costs still see the real body)."""
@@ -105,12 +118,13 @@ class NeuralParkerPlanner:
         std = self.model.log_std.detach().exp().numpy()
         nearest = config.over_capacity == "nearest"
         self.mean = PolicyRollouts(self.actor, np.zeros(2), self.env_config, nearest=nearest)
-        self.sampled = (PolicyRollouts(self.actor, std, self.env_config, config.samples, config.seed, nearest=nearest)
+        capped = rollout_env(self.env_config, config.rollout_max_arcs)
+        self.sampled = (PolicyRollouts(self.actor, std, capped, config.samples, config.seed, nearest=nearest)
                         if config.samples else None)
         self.single = (PolicyRollouts(self.actor, std, self.env_config, 1, config.seed, nearest=nearest)
                        if config.action == "sample" else None)
-        self.rescue = [PolicyRollouts(self.actor, std * scale, self.env_config, n, config.seed + 1 + k, first_arc,
-                                      nearest) for k, (n, scale, first_arc) in enumerate(config.rescue)]
+        self.rescue = [PolicyRollouts(self.actor, std * scale, capped, n, config.seed + 1 + k, first_arc, nearest)
+                       for k, (n, scale, first_arc) in enumerate(config.rescue)]
         weights = config.weights
         # Twice the steerable bound: the Hermite segment's curvature is known only at its samples.
         kappa_limit = 2.0 * (1.0 + weights.curvature_tolerance) * self.body.kappa_max
@@ -132,8 +146,9 @@ class NeuralParkerPlanner:
     def plan(self, scene: Scene, start) -> Plan:
         """Roll out the mean action from ``start`` until success, collision or the arc budget (paper §III-A); with
         ``samples``, the best of that and the sampled rollouts (``np_policy.sampling.choose``), then the rescue
-        rounds, unless ``accept_mean_m`` accepts the mean rollout first; with ``action='sample'``, one rollout of
-        sampled actions. ``Plan.stage`` names the stage that gave the plan: 'mean', 'sampled' or 'rescue'."""
+        rounds while the best fails or keeps too little clearance (``_rescue_wanted_m``), unless ``accept_mean_m``
+        accepts the mean rollout first; with ``action='sample'``, one rollout of sampled actions. ``Plan.stage``
+        names the stage that gave the plan: 'mean', 'sampled' or 'rescue'."""
         t0 = time.perf_counter()
         if self.single is not None:
             plan = self._claimed(scene, self.single(scene, start, seed=query_seed(self.config.seed, start))[0])
@@ -149,8 +164,8 @@ class NeuralParkerPlanner:
             plan = self._claimed(scene, plan)
         if self.sampled is not None:
             plan, stage = self._choose_claimed(scene, [plan, *self.sampled(scene, start)], anytime), "sampled"
-        for rounds in self.rescue:
-            if plan.success and not self._too_close(scene, plan):
+        for k, rounds in enumerate(self.rescue):
+            if plan.success and not self._too_close(scene, plan, self._rescue_wanted_m(k)):
                 break
             plan, stage = self._choose_claimed(scene, [plan, *rounds(scene, start)], first_checked=True), "rescue"
         return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
@@ -193,10 +208,16 @@ class NeuralParkerPlanner:
         reason = validation_failure(scene, plan, env.collision, self.body, env.episode.samples_per_arc)
         return dataclasses.replace(plan, success=False, reason=reason) if reason else plan
 
-    def _too_close(self, scene: Scene, plan: Plan) -> bool:
-        """The plan keeps less clearance than ``config.rescue_clearance_m`` (module docstring)."""
-        if self.config.rescue_clearance_m <= 0.0:
+    def _rescue_wanted_m(self, k: int) -> float:
+        """The clearance (m) a successful plan must keep for rescue round ``k`` to be skipped:
+        ``rescue_clearance_m`` before the first round, ``rescue_stop_m`` (when set) before the later ones."""
+        stop = self.config.rescue_stop_m
+        return self.config.rescue_clearance_m if k == 0 or stop is None else stop
+
+    def _too_close(self, scene: Scene, plan: Plan, clearance_m: float) -> bool:
+        """The plan's clearance level (the ``weights.margins_m`` ladder) is below ``clearance_m``; never for 0."""
+        if clearance_m <= 0.0:
             return False
         weights = self.config.weights
         poses = plan.sample(weights.sample_ds_m)[:, :3]
-        return clearance_level(scene, poses, self.body, weights.margins_m) < self.config.rescue_clearance_m
+        return clearance_level(scene, poses, self.body, weights.margins_m) < clearance_m

@@ -127,11 +127,14 @@ def test_footprint_preset_fields_reach_the_planner_and_the_config(tmp_path):
     config = json.loads((out / "config.json").read_text())["config"]["planner"]["neuralparker_footprint"]
     assert config["samples"] == 4 and config["connector"] == "centred" and config["rescue_clearance_m"] == 0.2
     assert config["rescue"] == [[8, 2.0, "policy"], [6, 1.0, "uniform"]] and config["accept_mean_m"] == 0.2
+    assert config["rollout_max_arcs"] == 50 and config["rescue_stop_m"] is None
     table = (out / "table.md").read_text()
     assert "returns its mean rollout at once when that succeeds, is steerable and keeps 0.2 m of clearance" in table
     assert "best of its mean rollout and 4 sampled rollouts" in table and "terminal connector: centred" in table
     assert ("When none of them succeeds or the best keeps less than 0.2 m clearance it samples 8 at 2 σ, then 6 "
             "at 1 σ after a uniform first arc (planner.neuralparker_footprint.rescue)." in table)
+    assert ("sampled and rescue rollouts end as timeouts after 50 arcs, its mean rollout at the policy env's budget "
+            "(planner.neuralparker_footprint.rollout_max_arcs)." in table and "rescue_stop_m" not in table)
 
 
 def test_the_default_site_planners_are_the_presets():
@@ -143,6 +146,7 @@ def test_the_default_site_planners_are_the_presets():
                               SITE_PLANNERS)
     default = planners["neuralparker_footprint"]
     assert [(r.n, r.first_arc) for r in default.rescue] == [(128, "policy"), (128, "policy"), (128, "uniform")]
+    assert [r.config.episode.max_arcs for r in (default.mean, default.sampled, *default.rescue)] == [200] + [50] * 4
     for rounds, scale in zip(default.rescue, (2.0, 3.0, 1.0), strict=True):
         assert rounds.std == pytest.approx(scale * default.sampled.std)
     assert default.env_config.connector.headings_deg == (90.0, 80.0, 100.0)

@@ -52,7 +52,8 @@ def _shapely_clearance(scene, rows, body) -> float:
 def planners():
     policy = Policy.load(CHECKPOINT)
     return (NeuralParkerPlanner(policy, dataclasses.replace(FOOTPRINT_ANYTIME, **SMALL)),
-            NeuralParkerPlanner(policy, dataclasses.replace(FOOTPRINT_BEST_OF_N, **SMALL)))
+            NeuralParkerPlanner(policy, dataclasses.replace(FOOTPRINT_BEST_OF_N, **SMALL,
+                                                            rollout_max_arcs=FOOTPRINT_ANYTIME.rollout_max_arcs)))
 
 
 def test_the_mean_rollout_is_kept_when_clear_and_otherwise_the_answer_is_best_of_n(planners, first_frames):
@@ -84,9 +85,12 @@ def test_a_clearance_no_plan_can_keep_sends_every_call_to_the_sampled_rounds(pla
     np.testing.assert_array_equal(plan.arcs, reference.arcs)
 
 
-def test_the_anytime_preset_is_best_of_n_with_the_wanted_margin_as_its_acceptance():
+def test_the_anytime_preset_is_best_of_n_with_the_wanted_margin_as_its_acceptance_and_an_arc_budget():
+    """'footprint_anytime' is 'footprint_best_of_n' accepting a mean rollout with 0.2 m and cutting its sampled and
+    rescue rollouts at 50 arcs (docs/best_of_n.md, 2026-12-03); 'footprint_best_of_n' keeps the env's 200."""
     assert PRESETS["footprint_anytime"] is FOOTPRINT_ANYTIME
-    assert FOOTPRINT_ANYTIME == dataclasses.replace(FOOTPRINT_BEST_OF_N, accept_mean_m=0.2)
+    assert FOOTPRINT_ANYTIME == dataclasses.replace(FOOTPRINT_BEST_OF_N, accept_mean_m=0.2, rollout_max_arcs=50)
+    assert FOOTPRINT_BEST_OF_N.rollout_max_arcs is None and FOOTPRINT_ANYTIME.rescue_stop_m is None
     assert FOOTPRINT_ANYTIME.accept_mean_m == FOOTPRINT_ANYTIME.weights.wanted_margin_m
     assert NeuralParkerConfig.from_dict(json.loads(json.dumps(FOOTPRINT_ANYTIME.to_dict()))) == FOOTPRINT_ANYTIME
     with pytest.raises(ConfigError, match=r"NeuralParkerConfig.accept_mean_m: expected a finite number >= 0 m"):
