@@ -3,8 +3,9 @@ recording in ``STUDY_DIR/rrd/`` shows at its first contact.
 
 ``python -m experiments.failure_review STUDY_DIR``
 
-For every recording ``rrd/<factor>_<level>_<planner>_<clip>.rrd`` (the failure each disturbance caused, as the
-study chooses them) it reads the run back (`tracking.rrd_read.read_run`) and writes into ``STUDY_DIR/review/``:
+For the recording of every failure the study records (`experiments.robustness_report.failure_cases`: the failure
+each disturbance caused; ``rrd/<factor>_<level>_<planner>_<clip>.rrd``, `experiments.robustness.recording_path`)
+it reads the run back (`tracking.rrd_read.read_run`) and writes into ``STUDY_DIR/review/``:
 
 * ``cases.csv`` and ``cases.md``: per recording the factor, level, planner and clip; whether the clip passes
   undisturbed with that planner (``caused``); the study row's outcome, the re-driven run's outcome and whether
@@ -39,7 +40,7 @@ from experiments.closed_loop import ClosedLoopConfig, disturbed
 from experiments.registry import label
 from experiments.review_case import KINDS, ContactReview, review_contact
 from experiments.review_figure import Panel, review_sheet
-from experiments.robustness import stored_study, study_spec
+from experiments.robustness import recording_path, stored_study, study_spec
 from experiments.robustness_report import failure_cases
 from experiments.robustness_sources import build_source, disturbance_at
 from np_sim.cli import cli_boundary
@@ -92,17 +93,6 @@ def load_study(folder: Path) -> Study:
                  factors=list(args.factors), levels=list(args.levels), seed=args.seed, rows=rows)
 
 
-def recording_key(stem: str, study: Study) -> tuple[str, str, str, str] | None:
-    """(factor, level, planner, clip) a recording's file stem names, None for a file of no run of the study."""
-    cells = [("none", "none")] + [(f, lv) for f in study.factors for lv in study.levels]
-    for factor, level in cells:
-        for planner in study.planners:
-            prefix = f"{factor}_{level}_{planner}_"
-            if stem.startswith(prefix) and stem[len(prefix):] in study.clips:
-                return factor, level, planner, stem[len(prefix):]
-    return None
-
-
 def bodies(study: Study, factor: str, level: str) -> tuple[VehicleSpec, VehicleSpec]:
     """(the body planned for, the body the simulator drove) under ``factor`` at ``level``: the disturbed tracker's
     vehicle and its plant body."""
@@ -119,9 +109,9 @@ def _number(value: float) -> str:
 
 
 def case_row(study: Study, key: tuple[str, str, str, str], run: RecordedRun,
-             body: tuple[VehicleSpec, VehicleSpec]) -> tuple[dict, ContactReview | None]:
-    """The ``cases.csv`` row of the recording of ``key`` and its contact review (None without a contact); ``body``:
-    (planned, driven) (`bodies`)."""
+             body: tuple[VehicleSpec, VehicleSpec], recording: str) -> tuple[dict, ContactReview | None]:
+    """The ``cases.csv`` row of ``run``, the recording (file name ``recording``) of ``key``, and its contact review
+    (None without a contact); ``body``: (planned, driven) (`bodies`)."""
     factor, level, planner, name = key
     (row,) = [r for r in study.rows if (r["factor"], r["level"], r["planner"], r["clip"]) == key]
     undisturbed = [r for r in study.rows if (r["factor"], r["level"], r["planner"], r["clip"]) ==
@@ -134,7 +124,7 @@ def case_row(study: Study, key: tuple[str, str, str, str], run: RecordedRun,
            "caused": "yes" if undisturbed and int(undisturbed[0]["footprint_success"]) else "no",
            "study_outcome": _outcome(row["reason"]), "recorded_outcome": recorded,
            "matches_study": "yes" if (recorded, first_geom) == (_outcome(row["reason"]), row["first_contact_geom"])
-           else "no", "recording": f"{'_'.join(key)}.rrd"}
+           else "no", "recording": recording}
     if not run.contacts:
         _, values = run.controller.get("cross_track_m", ([], []))
         worst = float(np.abs(values).max()) if len(values) else math.nan
@@ -191,17 +181,16 @@ def review_study(study: Study, out: Path) -> dict[str, Any]:
     """Review every recording of ``study`` into ``out`` (cases.csv, cases.md, <factor>.png)."""
     out.mkdir(exist_ok=True)
     rows, panels = [], {}
-    for path in sorted((study.folder / "rrd").glob("*.rrd")):
-        key = recording_key(path.stem, study)
-        if key is None:
-            continue  # not a run of this study (a file put there by hand)
-        body = bodies(study, key[0], key[1])
+    for case in failure_cases(study.rows, list(study.clips)):
+        path = recording_path(study.folder, case)
+        if not path.exists():
+            continue  # recorded with --no-rrd, or not yet
+        key = (case.factor, case.level, case.planner, case.unit)
+        body = bodies(study, case.factor, case.level)
         run = read_run(path)
-        row, review = case_row(study, key, run, body)
+        row, review = case_row(study, key, run, body, path.name)
         rows.append(row)
-        panels.setdefault(key[0], []).append(Panel(key[1], key[2], run, review, body[1], _caption(row)))
-    order = {(c.factor, c.level, c.planner): k for k, c in enumerate(failure_cases(study.rows, list(study.clips)))}
-    rows.sort(key=lambda r: order.get((r["factor"], r["level"], r["planner"]), len(order)))
+        panels.setdefault(case.factor, []).append(Panel(case.level, case.planner, run, review, body[1], _caption(row)))
     with (out / "cases.csv").open("w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=COLUMNS, restval="")
         writer.writeheader()

@@ -55,7 +55,7 @@ from experiments.closed_loop import (CLIP_SPLITS, PLANNERS, SITE_PLANNERS, Close
 from experiments.common import git_commit, run_folder
 from experiments.overrides import apply_overrides
 from experiments.registry import PlannerOptions, build_planners, check_names
-from experiments.robustness_report import factor_figure, failure_cases, format_table
+from experiments.robustness_report import FailureCase, factor_figure, failure_cases, format_table
 from experiments.robustness_sources import StartSpec, build_source, disturbance_at
 from experiments.scene_files import scene_file
 from experiments.track import PLANNERS as TRACK_PLANNERS
@@ -203,6 +203,11 @@ def run_jobs(jobs: list[tuple], names: list[str], spec, seed: int, log: RecordLo
         ray.shutdown()
 
 
+def recording_path(folder: Path, case: FailureCase) -> Path:
+    """Where the study in ``folder`` keeps the recording of ``case``: ``rrd/<factor>_<level>_<planner>_<unit>.rrd``."""
+    return folder / "rrd" / f"{case.factor}_{case.level}_{case.planner}_{case.unit.replace('#', '_')}.rrd"
+
+
 def record_failures(rows: list[dict], source, seed: int, folder: Path) -> list[Path]:
     """Drive the failure each disturbance caused (`experiments.robustness_report.failure_cases`: per factor × level
     × planner the first clip or episode, in ``source.units`` order, that fails there but passes undisturbed, else
@@ -215,7 +220,7 @@ def record_failures(rows: list[dict], source, seed: int, folder: Path) -> list[P
     planners = build_planners(sorted({c.planner for c in cases}), source.options)
     written = []
     for case in tqdm(cases, desc="recording failures"):
-        path = folder / "rrd" / f"{case.factor}_{case.level}_{case.planner}_{case.unit.replace('#', '_')}.rrd"
+        path = recording_path(folder, case)
         if not path.exists():
             path.parent.mkdir(exist_ok=True)
             source.record(order[case.unit], planners[case.planner], case.factor, case.level, seed, path)
