@@ -6,6 +6,12 @@ arrays and evaluates the same network — stream MLPs, the geometry-token attent
 block(s), the projection and the actor MLP of ``np_policy.network`` (paper §III-C, App. A Table IV) — in one
 numba function, so a call costs tens of microseconds. It is tested against the torch model to float32 rounding.
 
+A batch of ``TORCH_BATCH`` or more observations (the footprint planner's sampled and rescue rollouts) goes to the
+torch model instead: its batched forward does the products over all rows at once, about three times the rows per
+second of the compiled kernel at batches of 32–128 with one thread, where the compiled kernel pays a small product
+per layer and row (``python -m np_policy.bench_actor``). The actions agree to float32 rounding, not bit for bit;
+a batch of one (the paper's planner, the mean rollout) always takes the compiled kernel.
+
 Layout: the weights are flattened into two typed lists, matrices (in × out, so ``x @ W``) and vectors (biases,
 LayerNorm gains and offsets), in exactly the order ``_mean_action`` consumes them; ``_export`` is the one place
 that order is written on the Python side.
@@ -23,6 +29,11 @@ from torch import nn
 
 import np_sim.kernels  # noqa: F401  (sets numba's cache directory)
 from np_policy.network import ActorCritic, SelfAttentionBlock
+
+
+TORCH_BATCH = 8
+"""Batches of at least this many observations run the torch model's forward (module docstring): from about 8 rows
+its batched forward passes the compiled kernel called per row (``python -m np_policy.bench_actor``)."""
 
 
 @njit(cache=True, error_model="numpy")
@@ -184,6 +195,7 @@ class CompiledActor:
         self.shape = np.array([2 * enc.obs_config.vertices_per_obstacle, net.token_heads, net.fusion_heads,
                                len(enc.fusion), n_actor], np.int64)
         self.obs_size = enc.obs_size
+        self.model = model
         with torch.no_grad():
             self.mats, self.vecs = _export(model)
 
@@ -196,9 +208,12 @@ class CompiledActor:
         return _mean_action(obs, self.mats, self.vecs, self.sections, self.shape, self.eps)
 
     def batch(self, obs: np.ndarray) -> np.ndarray:
-        """(B, 2) float32 actions for B flat observations (B, ``obs_size``), one compiled call for all rows."""
+        """(B, 2) float32 actions for B flat observations (B, ``obs_size``): one compiled call for all rows below
+        ``TORCH_BATCH`` rows, the torch model's batched forward from there (module docstring)."""
         obs = np.ascontiguousarray(obs, dtype=np.float32)
         if obs.ndim != 2 or obs.shape[1] != self.obs_size:
             raise ValueError(f"CompiledActor.batch: expected observations of shape (B, {self.obs_size}), "
                              f"got {obs.shape}")
+        if len(obs) >= TORCH_BATCH:
+            return self.model.mean_action(torch.from_numpy(obs)).numpy()
         return _mean_actions(obs, self.mats, self.vecs, self.sections, self.shape, self.eps)

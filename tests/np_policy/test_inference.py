@@ -7,7 +7,7 @@ import torch
 
 from np_policy.bench_update import synthetic_obs
 from np_policy.config import NetworkConfig
-from np_policy.inference import CompiledActor
+from np_policy.inference import TORCH_BATCH, CompiledActor
 from np_policy.network import ActorCritic
 from np_sim.config import ObservationConfig
 
@@ -33,8 +33,12 @@ def test_compiled_mean_action_matches_torch(name):
     actor = CompiledActor(model)
     got = np.stack([actor(o) for o in obs.numpy()])
     assert got.dtype == np.float32
-    np.testing.assert_array_equal(actor.batch(obs.numpy()), got)
     np.testing.assert_allclose(got, expected, atol=2e-5, rtol=1e-4)
+    small = TORCH_BATCH - 1  # below the threshold: the compiled kernel, bit for bit
+    np.testing.assert_array_equal(actor.batch(obs.numpy()[:small]), got[:small])
+    batched = actor.batch(obs.numpy())  # 32 rows: torch's batched forward
+    assert batched.dtype == np.float32
+    np.testing.assert_allclose(batched, got, atol=2e-5, rtol=1e-4)
     assert (np.abs(expected) == 1.0).any() and (np.abs(expected) < 1.0).any()
 
 
