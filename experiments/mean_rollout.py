@@ -34,27 +34,22 @@ from np_policy.sampling import clearance_level, steerable
 from np_sim.clips import find_clip
 from np_sim.cli import cli_boundary, fresh_folder, positive_int
 from np_sim.errors import StartInCollisionError
-from np_sim.validate import validation_failure
 from tracking.clip_run import ClipRunConfig
 
 
 def outcome(planner, scene, start) -> tuple[str, float]:
-    """(category of the module docstring, clearance level in m or nan) of ``planner``'s mean rollout."""
-    plan = planner.mean(scene, start)[0]
-    if plan.success:
-        env = planner.env_config
-        reason = validation_failure(scene, plan, env.collision, planner.body, env.episode.samples_per_arc)
-        if reason:
-            return reason, float("nan")
+    """(category of the module docstring, clearance level in m or nan) of ``planner``'s mean rollout, validated
+    and tested for acceptance by the planner's own ``claimed`` and ``accepted``."""
+    plan = planner.claimed(scene, planner.mean(scene, start)[0])
     if not plan.success:
         return plan.reason, float("nan")
     weights = planner.config.weights
     rows = plan.sample(weights.sample_ds_m)
     level = clearance_level(scene, rows[:, :3], planner.body, weights.margins_m)
+    if planner.accepted(scene, plan):
+        return "accepted", level
     if not steerable(rows, planner.body, weights):
         return "success, unsteerable", level
-    if level >= planner.config.accept_mean_m:
-        return "accepted", level
     return f"success, clearance {level:g} m", level
 
 

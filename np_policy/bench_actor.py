@@ -16,12 +16,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 from pathlib import Path
 
 import torch
 
-from np_policy.bench_update import synthetic_obs
+from np_policy.bench_update import _seconds, synthetic_obs
 from np_policy.inference import TORCH_BATCH, CompiledActor, _mean_actions
 from np_policy.planner import Policy
 from np_sim.cli import cli_boundary, positive_int
@@ -30,12 +29,7 @@ from np_sim.cli import cli_boundary, positive_int
 def _best_seconds(fn, repeats: int) -> float:
     """The fastest of ``repeats`` calls of ``fn`` after one warm-up call (s)."""
     fn()
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
+    return min(_seconds(fn) for _ in range(repeats))
 
 
 def measure(checkpoint: str | Path, batches=(1, 8, 32, 128), repeats: int = 20) -> list[dict]:

@@ -131,7 +131,7 @@ class NeuralParkerPlanner:
         self.accept_implies_valid = (config.accept_mean_m is not None and self.convention == "footprint"
                                      and clearance_covers_sweep(self.body, config.accept_mean_m,
                                                                 weights.sample_ds_m, kappa_limit))
-        """The anytime test (``_accepted``) implies the claim check (``_claimed``), so an accepted mean rollout is
+        """The anytime test (``accepted``) implies the claim check (``claimed``), so an accepted mean rollout is
         not validated a second time (`np_policy.sampling.clearance_covers_sweep`)."""
 
     @classmethod
@@ -151,17 +151,17 @@ class NeuralParkerPlanner:
         names the stage that gave the plan: 'mean', 'sampled' or 'rescue'."""
         t0 = time.perf_counter()
         if self.single is not None:
-            plan = self._claimed(scene, self.single(scene, start, seed=query_seed(self.config.seed, start))[0])
+            plan = self.claimed(scene, self.single(scene, start, seed=query_seed(self.config.seed, start))[0])
             return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage="sampled")
         plan, stage = self._mean_rollout(scene, start), "mean"
         anytime = self.config.accept_mean_m is not None
         test_first = self.accept_implies_valid  # an accepted mean rollout needs no claim check
         if (self.sampled is None or anytime) and not test_first:
-            plan = self._claimed(scene, plan)
-        if anytime and self._accepted(scene, plan):
+            plan = self.claimed(scene, plan)
+        if anytime and self.accepted(scene, plan):
             return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
         if test_first:
-            plan = self._claimed(scene, plan)
+            plan = self.claimed(scene, plan)
         if self.sampled is not None:
             plan, stage = self._choose_claimed(scene, [plan, *self.sampled(scene, start)], anytime), "sampled"
         for k, rounds in enumerate(self.rescue):
@@ -170,7 +170,7 @@ class NeuralParkerPlanner:
             plan, stage = self._choose_claimed(scene, [plan, *rounds(scene, start)], first_checked=True), "rescue"
         return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
 
-    def _accepted(self, scene: Scene, plan: Plan) -> bool:
+    def accepted(self, scene: Scene, plan: Plan) -> bool:
         """The validated ``plan`` succeeds, is steerable and keeps ``accept_mean_m`` of clearance (the anytime test)."""
         if not plan.success:
             return False
@@ -184,7 +184,7 @@ class NeuralParkerPlanner:
         return self.mean(scene, start)[0]
 
     def _choose_claimed(self, scene: Scene, plans: Sequence[Plan], first_checked: bool = False) -> Plan:
-        """``choose`` among the plans whose success passes ``_claimed``: the chosen plan is validated, and when it
+        """``choose`` among the plans whose success passes ``claimed``: the chosen plan is validated, and when it
         fails it is replaced by its failure and the choice is made again. The same answer as validating every plan
         first, at the cost of validating only the candidates the choice reaches (the exact footprint rule costs
         milliseconds per rollout). ``first_checked``: ``plans[0]`` has been validated already."""
@@ -193,12 +193,12 @@ class NeuralParkerPlanner:
             plan = choose(plans, scene, self.body, self.config.weights)
             if not plan.success or (first_checked and plan is plans[0]):
                 return plan
-            claimed = self._claimed(scene, plan)
-            if claimed.success:
+            checked = self.claimed(scene, plan)
+            if checked.success:
                 return plan
-            plans[next(i for i, p in enumerate(plans) if p is plan)] = claimed
+            plans[next(i for i, p in enumerate(plans) if p is plan)] = checked
 
-    def _claimed(self, scene: Scene, plan: Plan) -> Plan:
+    def claimed(self, scene: Scene, plan: Plan) -> Plan:
         """``plan``, or a failure with reason 'validation: …' when a success breaks the rule it is scored by (the
         env's own: the paper's or the sampled footprint) or, under the footprint convention, the exact swept rule
         (`np_sim.validate.validation_failure`, with the real body)."""
