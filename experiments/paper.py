@@ -59,6 +59,8 @@ class Arm:
     """'own' (the checkpoint's connector), 'ensemble' (ensemble swapped in at evaluation) or 'staged'."""
 
 
+HOPE_ACTION = "sampled"
+"""How the adapted-HOPE rows play their policy: HOPE's evaluation protocol (`hope_policy.planner`)."""
 EVAL_FOLDERS = {"own": "eval_{benchmark}", "ensemble": "eval_{benchmark}_ensemble", "staged": "eval_{benchmark}_staged"}
 """The evaluation's records folder inside a run folder."""
 
@@ -111,9 +113,11 @@ def state_text(run: RunSpec, state) -> str:
 
 
 def read_records(path: Path) -> list[dict]:
-    """Per-episode rows of a ``records.csv`` (scene, start_id, success, L, reversals, delta_kappa, plan_time_ms)."""
+    """Per-episode rows of a ``records.csv`` (scene, start_id, success, reason, L, reversals, delta_kappa,
+    plan_time_ms)."""
     with path.open(newline="") as fh:
         return [{"key": (row["scene"], int(row["start_id"])), "success": int(row["success"]),
+                 "reason": row.get("reason") or "",
                  "L": float(row["L"]), "reversals": float(row["reversals"]),
                  "delta_kappa": float(row["delta_kappa"]), "plan_time_ms": float(row["plan_time_ms"])}
                 for row in csv.DictReader(fh)]
@@ -127,13 +131,27 @@ def evaluation_missing(arm: Arm, run: RunSpec) -> str:
     return ""
 
 
+def stale_protocol(run: RunSpec, folder: Path) -> str:
+    """Why ``folder``'s records of an adapted-HOPE run were made under another action protocol than the report's
+    (`HOPE_ACTION`; records written before ``config.json`` said which played the mean action); empty when not."""
+    if run.config.trainer != "hope_policy.train":
+        return ""
+    config_file = folder / "config.json"
+    config = json.loads(config_file.read_text()) if config_file.exists() else {}
+    action = config.get("hope", {}).get("action", "mean")
+    if action == HOPE_ACTION:
+        return ""
+    return (f"trained; {folder} was evaluated with the {action} action, the report plays HOPE's {HOPE_ACTION} "
+            f"actions (move the folder aside to re-evaluate)")
+
+
 def evaluation_argv(arm: Arm, run: RunSpec, folder: Path) -> list[str]:
     """The experiment CLI that writes ``folder``'s records for ``run``'s output checkpoint (`RunSpec.output`)."""
     checkpoint, benchmark = str(run.output), run.config.benchmark
     if run.config.trainer == "hope_policy.train":
         method = "staged_astar_hope" if arm.evaluation == "staged" else "hope"
         return [sys.executable, "-m", "experiments.planners", "--benchmark", benchmark, "--methods", method,
-                "--hope-checkpoint", checkpoint, "--out", str(folder)]
+                "--hope-checkpoint", checkpoint, "--hope-action", HOPE_ACTION, "--out", str(folder)]
     if arm.evaluation == "staged":
         return [sys.executable, "-m", "experiments.planners", "--benchmark", benchmark, "--checkpoint", checkpoint,
                 "--methods", "staged_astar_np", "--out", str(folder)]
@@ -189,6 +207,9 @@ def measure(arm: Arm, runs: dict, episodes: int, evaluate: bool, active: dict) -
                 result.missing[seed] = "trained, not evaluated yet"
                 continue
             subprocess.run(evaluation_argv(arm, run, folder), check=True, stdout=subprocess.DEVNULL)
+        if stale_protocol(run, folder):
+            result.missing[seed] = stale_protocol(run, folder)
+            continue
         rows = read_records(folder / "records.csv")
         if len(rows) != episodes:
             result.missing[seed] = f"{folder / 'records.csv'} has {len(rows)} episodes, expected {episodes}"
@@ -395,6 +416,9 @@ def measure_all(runs: dict, evaluate: bool) -> dict[str, list[ArmResult]]:
 
 
 NOTES = {
+    MAIN_COMPARISON.label: "Both rows on the 1,080 frozen Factorial starts: NeuralParker's selected `best.pt` of each "
+                           "seed (`python -m experiments.evaluate`), the adapted HOPE's `final.pt` after 10,000 "
+                           "episodes (`python -m experiments.planners --methods hope --hope-checkpoint RUN/final.pt`).",
     TWOSTAGE.label: "Our staged rows (`np_policy.staged.StagedPlanner`) hand over the raw Hybrid A* prefix (the "
                     "paper smooths it to continuous curvature where feasible, with the raw path as fallback); Δκ "
                     "sums prefix and downstream and leaves out the single hand-off jump, as the caption says. Records: "
@@ -488,7 +512,10 @@ def build_report(runs_root: Path, out_md: Path, evaluate: bool = True) -> str:
              "training): the paper's printed numbers beside ours, the seeds each row has, and a verdict on each of "
              "the paper's claims. Ours: three-seed mean ± sample SD where seeds exist (one seed: its value); "
              "success on the full set of frozen test starts, path metrics on the within-seed common-success cohort "
-             "of the rows measured. A claim is checked only when every row it compares has at least two seeds; a "
+             "of the rows measured. NeuralParker rows play the policy's mean action (the paper's deterministic "
+             "rollout); adapted-HOPE rows play HOPE's own evaluation protocol, sampled actions (the masked anchor "
+             "draw, or the clipped Gaussian sample where the mask is off) seeded per start. "
+             "A claim is checked only when every row it compares has at least two seeds; a "
              "gap within the larger seed SD of the two rows is 'within noise'. Which runs are still missing and "
              "how to train them: [sweep.md](sweep.md).", "",
              "Regenerate with `python -m experiments.paper` (about a minute here when the evaluation records exist; "

@@ -39,6 +39,7 @@ from experiments.common import first, git_commit, run_folder, write_records
 from experiments.registry import PlannerOptions, build_planners, check_names, label
 from experiments.scene_files import (add_scene_arguments, describe, episode_scenes, load_scene_files, scene_columns,
                                      starts_summary, strictest)
+from hope_policy.config import HOPE_ACTIONS
 from np_sim.cli import cli_boundary, fresh_folder, non_negative_int, positive_int, vehicle_spec
 from np_sim.collision import path_valid
 from np_sim.planners import HybridAStar
@@ -55,7 +56,7 @@ DEFAULT_CHECKPOINT = Path("checkpoints/factorial_np_seed0.pt")
 
 def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | None = DEFAULT_CHECKPOINT,
         convention: str = "reference_point", out: Path | None = None, limit: int | None = None, ompl_seed: int = 0,
-        progress: bool = True, hope_checkpoint: Path | None = None,
+        progress: bool = True, hope_checkpoint: Path | None = None, hope_action: str = "sampled", hope_seed: int = 0,
         vehicle: VehicleSpec | None = None, scenes: list[Path] | None = None, n_starts: int | None = None,
         seed: int = 0) -> dict[str, Any]:
     """Plan every frozen start with every method for ``vehicle`` (default the sedan); returns the records, the
@@ -64,7 +65,8 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
     methods = check_names(DEFAULT_METHODS if methods is None else methods, METHODS)
     vehicle = VehicleSpec() if vehicle is None else vehicle
     options = PlannerOptions(checkpoint=checkpoint, convention=convention, ompl_seed=ompl_seed,
-                             benchmark=None if scenes else benchmark, hope_checkpoint=hope_checkpoint, vehicle=vehicle)
+                             benchmark=None if scenes else benchmark, hope_checkpoint=hope_checkpoint, hope_action=hope_action,
+                             hope_seed=hope_seed, vehicle=vehicle)
     planners = build_planners(methods, options)
     files = (load_scene_files(scenes, n_starts, seed, strictest(p.convention for p in planners.values()), vehicle)
              if scenes else None)
@@ -97,6 +99,8 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
         "methods": methods, "checkpoint": None if checkpoint is None else str(checkpoint),
         "convention": convention, "vehicle": vehicle.to_dict(), "episodes": len(episodes), "ompl_seed": ompl_seed,
         "neuralparker": options.neuralparker.to_dict(),
+        "hope": {"checkpoint": None if hope_checkpoint is None else str(hope_checkpoint), "action": hope_action,
+                 "seed": hope_seed},
         "hybrid_astar": {k: v for k, v in vars(planners.get("hybrid_astar", HybridAStar()).config).items()
                          if k != "vehicle"},
         "git_commit": git_commit()}, indent=2, default=str))
@@ -157,6 +161,12 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--hope-checkpoint", type=Path,
                         help="adapted-HOPE checkpoint of the hope and staged_astar_hope methods "
                              "(hope_policy.train's final.pt)")
+    parser.add_argument("--hope-action", choices=HOPE_ACTIONS, default="sampled",
+                        help="how the adapted HOPE picks its actions: sampled (HOPE's evaluation protocol: the "
+                             "masked anchor draw, or the clipped Gaussian sample; the default) or mean (the mean "
+                             "action / most probable anchor)")
+    parser.add_argument("--hope-seed", type=non_negative_int, default=0,
+                        help="seed of the adapted HOPE's sampled actions (default 0)")
     parser.add_argument("--convention", choices=["reference_point", "footprint"], default="reference_point")
     parser.add_argument("--vehicle", type=vehicle_spec, default=VehicleSpec(),
                         help="vehicle planned for: a preset (sedan, the default; van) or a vehicle JSON file "
@@ -168,7 +178,8 @@ def main(argv=None) -> dict[str, Any]:
     add_scene_arguments(parser)
     args = parser.parse_args(argv)
     result = run(args.benchmark, args.methods, args.checkpoint, args.convention, args.out, args.limit, args.ompl_seed,
-                 hope_checkpoint=args.hope_checkpoint, vehicle=args.vehicle, scenes=args.scenes,
+                 hope_checkpoint=args.hope_checkpoint, hope_action=args.hope_action, hope_seed=args.hope_seed,
+                 vehicle=args.vehicle, scenes=args.scenes,
                  n_starts=args.starts, seed=args.seed)
     if result["starts"]:
         print(result["starts"])

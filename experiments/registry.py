@@ -54,6 +54,11 @@ class PlannerOptions:
     hope_checkpoint: Path | None = None
     """Checkpoint of 'hope', the adapted HOPE baseline (`hope_policy.train`'s ``final.pt``), also the second stage of
     'staged_astar_hope'."""
+    hope_action: str = "sampled"
+    """How 'hope' and 'staged_astar_hope' play the adapted HOPE's policy: 'sampled' (HOPE's evaluation protocol, the
+    default) or 'mean' (`hope_policy.planner`)."""
+    hope_seed: int = 0
+    """Seed of the adapted HOPE's sampled actions (each plan's draws also depend on its start pose)."""
     benchmark: str | None = None
     """The scenes the planners will plan ('factorial', 'topology', 'examples', 'site'): a checkpoint of another
     observation layout is refused when loaded; None checks nothing."""
@@ -152,7 +157,7 @@ def _hope(options: PlannerOptions, load: PolicyLoader) -> Planner:
     from np_policy.checkpoint import check_vehicle
 
     path = required_checkpoint(options.hope_checkpoint, "hope", "--hope-checkpoint PATH")
-    planner = HopePlanner.from_checkpoint(path)
+    planner = HopePlanner.from_checkpoint(path, options.hope_action, options.hope_seed)
     check_vehicle(path, planner.config.env.vehicle, options.vehicle)
     return planner
 

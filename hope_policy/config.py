@@ -25,6 +25,9 @@ from np_sim.vehicle import VehicleSpec
 AddedInput = Literal["none", "bev", "vertices"]
 ADDED_INPUTS = ("none", "bev", "vertices")
 
+HOPE_ACTIONS = ("sampled", "mean")
+"""How the adapted HOPE's planner picks each action (`hope_policy.planner`): HOPE's evaluation draw, or the mean."""
+
 
 def _check_fields(obj: Any, positive: tuple[str, ...] = (), nonnegative: tuple[str, ...] = ()) -> None:
     """Type check every non-dataclass field of the frozen config ``obj`` (``check_types``), then the ranges."""

@@ -155,6 +155,11 @@ def test_a_finished_adapted_hope_run_is_read_from_final_pt_and_its_planner_recor
     assert measure(hope, runs, 1, False, {}).missing[0] == "not trained yet (started, no snapshot, episode 10200 of " \
         "10000)"  # no final.pt: not finished, whatever the episode count
     (seed0 / "final.pt").write_bytes(b"")
+    # records without the protocol in config.json were played with the mean action: refused, not mixed in
+    assert measure(hope, runs, 1, False, {}).missing[0].endswith(
+        "was evaluated with the mean action, the report plays HOPE's sampled actions (move the folder aside to "
+        "re-evaluate)")
+    (seed0 / "eval_factorial" / "config.json").write_text(json.dumps({"hope": {"action": "sampled", "seed": 0}}))
     measured = measure(hope, runs, 1, False, {})
     assert sorted(measured.records) == [0] and measured.seeds_text().startswith("1 of 3 (seed 0; seed 1: not trained")
     staged_arm = Arm("Hybrid A* → HOPE", "factorial_hope", "staged")
@@ -165,7 +170,8 @@ def test_a_finished_adapted_hope_run_is_read_from_final_pt_and_its_planner_recor
         "the ensemble evaluation of an adapted-HOPE checkpoint is not built yet")
     argv = evaluation_argv(hope, runs[("factorial_hope", 0)], seed0 / "eval_factorial")
     assert argv[1:] == ["-m", "experiments.planners", "--benchmark", "factorial", "--methods", "hope",
-                        "--hope-checkpoint", str(seed0 / "final.pt"), "--out", str(seed0 / "eval_factorial")]
+                        "--hope-checkpoint", str(seed0 / "final.pt"), "--hope-action", "sampled", "--out",
+                        str(seed0 / "eval_factorial")]
     assert epoch_hours(seed0 / "metrics.jsonl") == pytest.approx(3 * 60.0 / 3600)
 
 
