@@ -12,7 +12,7 @@ Actions (``action``): 'sampled' (the default) is HOPE's own evaluation protocol 
 an executed action from 42 anchors using the policy density multiplied by LiDAR-derived safety weights"): with the
 action mask an anchor drawn by HOPE's masked choice (`hope_policy.action_mask.apply_mask`), without it
 ``clip(μ + σ ε, −1, 1)``, as HOPE's ``choose_action`` plays both at evaluation. The draws come from a generator
-seeded by (``seed``, the start pose's bytes), so a plan depends only on its scene, start and seed, not on the order
+seeded by (``seed``, the start pose's bits), so a plan depends only on its scene, start and seed, not on the order
 of the calls. 'mean' is a deterministic variant: the mean action, or the most probable masked anchor.
 """
 
@@ -35,6 +35,7 @@ from hope_policy.normalization import ObservationNormaliser
 from hope_policy.spaces import observation_space
 from hope_policy.train import HopeTrainConfig
 from np_policy.checkpoint import CheckpointError, load_weights
+from np_policy.planner import query_seed
 from np_sim.errors import ConfigError
 from np_sim.plan import Plan
 from np_sim.scene import Scene
@@ -101,11 +102,9 @@ class HopePlanner:
 
     def episode_rng(self, start) -> np.random.Generator | None:
         """The generator of one plan's draws (None for the 'mean' action): seeded by the planner's seed and the
-        start pose's float64 bytes, so the same start draws the same actions whatever was planned before."""
-        if self.action_mode == "mean":
-            return None
-        words = np.frombuffer(np.asarray(start, np.float64).tobytes(), np.uint32)
-        return np.random.default_rng([self.seed, *words.tolist()])
+        start pose's bits (`np_policy.planner.query_seed`, as NeuralParker's sampled queries), so the same start
+        draws the same actions whatever was planned before."""
+        return None if self.action_mode == "mean" else np.random.default_rng(query_seed(self.seed, start))
 
     def plan(self, scene: Scene, start) -> Plan:
         """Roll the policy out from ``start`` (module docstring); the episode as a ``Plan``."""
