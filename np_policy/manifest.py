@@ -12,6 +12,10 @@ folder under ``resumable_runs``). Each entry records:
 - ``sha256`` and ``size_bytes`` of the file, and ``format``, the checkpoint format version
   (`np_policy.checkpoint.CHECKPOINT_FORMAT`; every file is loaded, so its content digest is verified too).
 
+A pretrained BEV autoencoder (``checkpoints/bev/<benchmark>_ae.pt``, `np_policy.bev_encoder`) comes from no training
+run: its entry holds ``kind``, its ``pretraining`` config, ``epochs``, the final ``held_out_mse``, ``sha256``,
+``size_bytes`` and ``format``.
+
 ``python -m np_policy.manifest build`` writes the manifest from the files; ``python -m np_policy.manifest check``
 rebuilds it and reports every difference with the committed one (exit status 2), e.g. a checkpoint replaced
 without rebuilding the manifest, a new shipped file, or a run that finished since.
@@ -27,6 +31,7 @@ from typing import Any
 
 import torch
 
+from np_policy.bev_encoder import KIND as AUTOENCODER_KIND
 from np_policy.checkpoint import CHECKPOINT_FORMAT, CheckpointError, load_checkpoint, write_atomic
 from np_sim.cli import cli_boundary
 
@@ -84,6 +89,16 @@ def _source_run(path: Path, payload: dict[str, Any], runs: list[Path], digest: s
     return found[0].parent, found[0]
 
 
+def autoencoder_entry(payload: dict[str, Any], digest: str, size: int) -> dict[str, Any]:
+    """The manifest entry of a pretrained BEV autoencoder (`np_policy.bev_encoder`): no training run, but its
+    pretraining config (the seed makes its images), epochs and final held-out MSE, as stored in the file."""
+    metrics = payload.get("metrics") or [{}]
+    pretraining = json.loads(json.dumps(payload.get("config")))  # as the manifest file holds it (lists)
+    return {"kind": AUTOENCODER_KIND, "pretraining": pretraining, "epochs": len(payload.get("metrics", [])),
+            "held_out_mse": metrics[-1].get("held_out_mse"), "sha256": digest, "size_bytes": size,
+            "format": CHECKPOINT_FORMAT}
+
+
 def _folder(root: str | Path) -> Path:
     """``root`` as a Path; a CheckpointError when it is not a folder."""
     if not Path(root).is_dir():
@@ -102,6 +117,9 @@ def build_manifest(root: str | Path = DEFAULT_ROOT) -> dict[str, Any]:
     for path in shipped_files(root):
         payload = load_checkpoint(path)
         digest = file_sha256(path)
+        if payload.get("kind") == AUTOENCODER_KIND:
+            files[rel(path)] = autoencoder_entry(payload, digest, path.stat().st_size)
+            continue
         run, copy_of = _source_run(path, payload, runs, digest)
         entry = {"run": rel(run), "epoch": payload.get("epoch"), "config": rel(run / "config.json"),
                  "sha256": digest, "size_bytes": path.stat().st_size, "format": CHECKPOINT_FORMAT}

@@ -6,6 +6,7 @@ import json
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 import torch
 
@@ -33,7 +34,11 @@ def test_the_committed_manifest_matches_the_committed_files():
         assert hashlib.sha256(data).hexdigest() == entry["sha256"], name
         assert len(data) == entry["size_bytes"], name
         raw = torch.load(root / name, map_location="cpu", weights_only=True)
-        assert raw["format"] == entry["format"] == CHECKPOINT_FORMAT and raw.get("epoch") == entry["epoch"], name
+        assert raw["format"] == entry["format"] == CHECKPOINT_FORMAT, name
+        if entry.get("kind") == "bev-autoencoder":  # pretrained, from no training run
+            assert raw["kind"] == entry["kind"] and len(raw["metrics"]) == entry["epochs"], name
+            continue
+        assert raw.get("epoch") == entry["epoch"], name
         assert entry["config"] == f"{entry['run']}/config.json" and (root / entry["config"]).is_file()
         source = entry.get("copy_of", name)
         assert source in (f"{entry['run']}/best.pt", f"{entry['run']}/final.pt")  # NeuralParker / adapted HOPE
@@ -115,3 +120,18 @@ def test_a_file_from_no_run_and_a_missing_manifest_are_one_error_line(tree, caps
         assert exit_info.value.code == 2 and err.startswith("error: ") and len(err.strip().splitlines()) == 1
     assert "MANIFEST.json: not a readable manifest" in err
     assert not (tree / "MANIFEST.json").exists()
+
+
+def test_a_pretrained_autoencoder_is_listed_with_its_pretraining_not_a_run(tree):
+    from np_policy.bev_encoder import PretrainConfig, pretrain
+
+    config = PretrainConfig(images=64, epochs=2, batch_size=32, collect_envs=4)
+    images = np.random.default_rng(0).integers(0, 256, (64, 3, 64, 64), dtype=np.uint8)
+    (tree / "bev").mkdir()
+    rows = pretrain(config, tree / "bev" / "tiny_ae.pt", images=images, log=lambda _: None, progress=False)
+    entry = build_manifest(tree)["files"]["checkpoints/bev/tiny_ae.pt"]
+    data = (tree / "bev" / "tiny_ae.pt").read_bytes()
+    assert entry["kind"] == "bev-autoencoder" and "run" not in entry
+    assert entry["pretraining"]["images"] == 64 and entry["epochs"] == 2
+    assert entry["held_out_mse"] == rows[-1]["held_out_mse"]
+    assert entry["sha256"] == hashlib.sha256(data).hexdigest() and entry["size_bytes"] == len(data)
