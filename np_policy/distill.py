@@ -129,7 +129,8 @@ def imitation_loss(mean: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
 def fit(policy: Policy, obs: np.ndarray, actions: np.ndarray, owner: np.ndarray, epochs: int,
         learning_rate: float, seed: int, progress: bool = True) -> list[dict[str, float]]:
     """Regress ``policy``'s mean onto ``actions`` in place (module docstring, step 2); per-epoch training and
-    held-out losses (a seeded tenth of the resets held out, rounded down; nan with none)."""
+    held-out losses (a seeded tenth of the resets held out, rounded down; None with none, and no training loss
+    before the first epoch)."""
     generator = torch.Generator().manual_seed(seed)
     resets = np.unique(owner)
     held = np.isin(owner, np.random.default_rng(seed).choice(resets, len(resets) // 10, replace=False))
@@ -141,11 +142,11 @@ def fit(policy: Policy, obs: np.ndarray, actions: np.ndarray, owner: np.ndarray,
 
     def held_out_loss() -> float:
         if not len(held_idx):
-            return float("nan")
+            return None
         with torch.no_grad():
             return float(imitation_loss(model.actor(model.encoder(x[held_idx])), y[held_idx]))
 
-    rows = [{"epoch": 0, "train_loss": float("nan"), "held_out_loss": held_out_loss()}]
+    rows = [{"epoch": 0, "train_loss": None, "held_out_loss": held_out_loss()}]
     for epoch in tqdm(range(1, epochs + 1), desc="fitting the mean", unit="epoch", disable=not progress):
         order = train_idx[torch.randperm(len(train_idx), generator=generator)]
         losses = []
@@ -199,10 +200,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     summary = distill(args.checkpoint, args.out, args.resets, args.epochs, args.learning_rate, args.seed)
-    last = summary["losses"][-1]
+    first, last = (row["held_out_loss"] for row in (summary["losses"][0], summary["losses"][-1]))
+    held = "no resets held out" if first is None else f"held-out loss {first:.4f} → {last:.4f}"
     print(f"{summary['counts']['accepted']} of {args.resets} resets gave accepted plans "
-          f"({summary['counts']['by_mean']} by the mean rollout), {summary['pairs']} pairs; held-out loss "
-          f"{summary['losses'][0]['held_out_loss']:.4f} → {last['held_out_loss']:.4f}; {args.out / 'best.pt'}")
+          f"({summary['counts']['by_mean']} by the mean rollout), {summary['pairs']} pairs; {held}; "
+          f"{args.out / 'best.pt'}")
     return summary
 
 

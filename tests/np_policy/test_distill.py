@@ -70,7 +70,7 @@ def test_collection_counts_add_up_and_the_fit_lowers_the_loss(planner, clip):
     policy = Policy.load(CHECKPOINT, "site")
     rows = fit(policy, obs, actions * 0.5, owner, epochs=30, learning_rate=1e-3, seed=0, progress=False)
     assert rows[-1]["train_loss"] < 0.5 * rows[1]["train_loss"]
-    assert np.isnan(rows[-1]["held_out_loss"])  # six resets: a tenth rounds down to none held out
+    assert rows[-1]["held_out_loss"] is None  # six resets: a tenth rounds down to none held out
 
 
 def test_distill_writes_a_run_folder_whose_policy_loads(tmp_path, clip):
@@ -83,3 +83,13 @@ def test_distill_writes_a_run_folder_whose_policy_loads(tmp_path, clip):
     assert len((tmp_path / "metrics.jsonl").read_text().splitlines()) == 3  # epoch 0 and two fitted epochs
     pairs = np.load(tmp_path / "pairs.npz")
     assert len(pairs["obs"]) == summary["pairs"] == len(pairs["actions"])
+
+
+def test_cli_refuses_a_used_folder_and_a_bad_count_in_one_line(tmp_path, capsys):
+    from cli_helpers import one_error_line
+    from np_policy.distill import main
+
+    (tmp_path / "used").mkdir()
+    (tmp_path / "used" / "best.pt").write_bytes(b"")
+    assert "used" in one_error_line(capsys, main, ["--out", str(tmp_path / "used")])
+    assert "--resets" in one_error_line(capsys, main, ["--out", str(tmp_path / "new"), "--resets", "0"])
