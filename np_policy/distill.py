@@ -2,7 +2,7 @@
 the plans its own best-of-N planner chooses, so that its mean rollout is accepted on more calls.
 
 ``python -m np_policy.distill --checkpoint checkpoints/site_np_footprint.pt --out DIR [--resets 1500]
-[--epochs 20] [--learning-rate 1e-4] [--seed 0]``
+[--epochs 20] [--learning-rate 1e-4] [--seed 0] [--pairs EARLIER/pairs.npz]``
 
 The footprint planner (`np_policy.planner`, preset 'footprint_anytime') answers a call at the price of one rollout
 only when the policy's mean rollout succeeds with 0.2 m of clearance (``accept_mean_m``); on the site clips that
@@ -162,13 +162,25 @@ def fit(policy: Policy, obs: np.ndarray, actions: np.ndarray, owner: np.ndarray,
     return rows
 
 
-def distill(checkpoint: Path, out: Path, resets: int = 1500, epochs: int = 20, learning_rate: float = 1e-4,
-            seed: int = 0, progress: bool = True, clips: list | None = None) -> dict[str, Any]:
-    """Collect, fit and write (module docstring); returns the settings, counts and per-epoch losses. ``clips``
-    replaces the difficult training clips after the first 94 (tests)."""
+def collected(pairs: Path, checkpoint: Path, resets: int, seed: int, progress: bool,
+              clips: list | None) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+    """The pairs of step 1: collected now, or read from an earlier run's ``pairs.npz`` (its counts from the
+    ``distill.json`` beside it)."""
+    if pairs is not None:
+        data = np.load(pairs)
+        counts = json.loads((Path(pairs).parent / "distill.json").read_text())["counts"]
+        return data["obs"], data["actions"], data["owner"], {**counts, "pairs_file": str(pairs)}
     planner = NeuralParkerPlanner(Policy.load(checkpoint, "site"), FOOTPRINT_ANYTIME)
     clips = recorded_clips(VALIDATION_CLIPS) if clips is None else clips
-    obs, actions, owner, counts = collect(planner, clips, resets, seed, progress)
+    return collect(planner, clips, resets, seed, progress)
+
+
+def distill(checkpoint: Path, out: Path, resets: int = 1500, epochs: int = 20, learning_rate: float = 1e-4,
+            seed: int = 0, progress: bool = True, clips: list | None = None,
+            pairs: Path | None = None) -> dict[str, Any]:
+    """Collect (or read ``pairs``), fit and write (module docstring); returns the settings, counts and per-epoch
+    losses. ``clips`` replaces the difficult training clips after the first 94 (tests)."""
+    obs, actions, owner, counts = collected(pairs, checkpoint, resets, seed, progress, clips)
     np.savez_compressed(out / "pairs.npz", obs=obs, actions=actions, owner=owner)
     policy = Policy.load(checkpoint, "site")
     rows = fit(policy, obs, actions, owner, epochs, learning_rate, seed, progress)
@@ -196,13 +208,16 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--resets", type=positive_int, default=1500, help="recorded resets to plan (default 1500)")
     parser.add_argument("--epochs", type=positive_int, default=20, help="passes over the pairs (default 20)")
     parser.add_argument("--learning-rate", type=positive_float, default=1e-4, help="Adam's step size (default 1e-4)")
+    parser.add_argument("--pairs", type=Path,
+                        help="fit on the pairs.npz of an earlier run (same --checkpoint) instead of planning again")
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the resets, the hold-out and the shuffling")
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
-    summary = distill(args.checkpoint, args.out, args.resets, args.epochs, args.learning_rate, args.seed)
+    summary = distill(args.checkpoint, args.out, args.resets, args.epochs, args.learning_rate, args.seed,
+                      pairs=args.pairs)
     first, last = (row["held_out_loss"] for row in (summary["losses"][0], summary["losses"][-1]))
     held = "no resets held out" if first is None else f"held-out loss {first:.4f} → {last:.4f}"
-    print(f"{summary['counts']['accepted']} of {args.resets} resets gave accepted plans "
+    print(f"{summary['counts']['accepted']} of {summary['counts']['resets']} resets gave accepted plans "
           f"({summary['counts']['by_mean']} by the mean rollout), {summary['pairs']} pairs; {held}; "
           f"{args.out / 'best.pt'}")
     return summary

@@ -83,6 +83,11 @@ def test_distill_writes_a_run_folder_whose_policy_loads(tmp_path, clip):
     assert len((tmp_path / "metrics.jsonl").read_text().splitlines()) == 3  # epoch 0 and two fitted epochs
     pairs = np.load(tmp_path / "pairs.npz")
     assert len(pairs["obs"]) == summary["pairs"] == len(pairs["actions"])
+    # a refit from those pairs plans nothing and fits the same data
+    (tmp_path / "refit").mkdir()
+    again = distill(CHECKPOINT, tmp_path / "refit", epochs=1, progress=False, pairs=tmp_path / "pairs.npz", clips=[])
+    assert again["pairs"] == summary["pairs"] and again["counts"]["accepted"] == summary["counts"]["accepted"]
+    np.testing.assert_array_equal(np.load(tmp_path / "refit" / "pairs.npz")["obs"], pairs["obs"])
 
 
 def test_cli_refuses_a_used_folder_and_a_bad_count_in_one_line(tmp_path, capsys):
