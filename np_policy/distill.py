@@ -184,8 +184,8 @@ def distill(checkpoint: Path, out: Path, resets: int = 1500, epochs: int = 20, l
     np.savez_compressed(out / "pairs.npz", obs=obs, actions=actions, owner=owner)
     policy = Policy.load(checkpoint, "site")
     rows = fit(policy, obs, actions, owner, epochs, learning_rate, seed, progress)
-    summary = {"checkpoint": str(checkpoint), "resets": resets, "epochs": epochs, "learning_rate": learning_rate,
-               "seed": seed, "validation_clips_skipped": VALIDATION_CLIPS, "pairs": int(len(obs)),
+    summary = {"checkpoint": str(checkpoint), "resets": counts["resets"], "epochs": epochs,
+               "learning_rate": learning_rate, "seed": seed, "validation_clips_skipped": VALIDATION_CLIPS, "pairs": int(len(obs)),
                "counts": counts, "losses": rows}
     payload = load_checkpoint(checkpoint)
     payload["model"] = policy.model.state_dict()
