@@ -235,8 +235,10 @@ def planner_notes(names: list[str], config: ClosedLoopConfig) -> list[str]:
     if "neuralparker_footprint" not in names:
         return notes
     if footprint.accept_mean_m is not None:
-        notes.append(f"NeuralParker (footprint) returns its mean rollout at once when that succeeds, is steerable "
-                     f"and keeps {footprint.accept_mean_m:g} m of clearance "
+        grown = (f", played first with the body grown by {footprint.mean_margin_m:g} m, then as is "
+                 f"(planner.neuralparker_footprint.mean_margin_m)," if footprint.mean_margin_m else "")
+        notes.append(f"NeuralParker (footprint) returns its mean rollout{grown} at once when that succeeds, is "
+                     f"steerable and keeps {footprint.accept_mean_m:g} m of clearance "
                      f"(planner.neuralparker_footprint.accept_mean_m); otherwise:")
     if footprint.samples:
         notes.append(f"NeuralParker (footprint) plays the best of its mean rollout and {footprint.samples} sampled "

@@ -5,7 +5,8 @@
 
 The footprint NeuralParker answers a call at the cost of one rollout only when the policy's mean rollout succeeds,
 passes the plan validation, is steerable and keeps the anytime test's clearance (`np_policy.planner`,
-``accept_mean_m``); every other call pays the sampled and rescue rounds. This script plays only that mean rollout
+``accept_mean_m``; with ``mean_margin_m``, the mean rollout of the grown body first, then the plain one); every
+other call pays the sampled and rescue rounds. This script plays only those mean rollouts
 on the scene of each clip's first planner call (`experiments.plan_time.first_frames`, the main job's tracking
 window) and sorts the outcomes: 'accepted' (success with at least ``accept_mean_m`` of clearance on the choice's
 ladder, steerable), 'success, clearance <level> m' (below it; −1: not even the plain footprint at the finer
@@ -40,7 +41,8 @@ from tracking.clip_run import ClipRunConfig
 def outcome(planner, scene, start) -> tuple[str, float]:
     """(category of the module docstring, clearance level in m or nan) of ``planner``'s mean rollout, validated
     and tested for acceptance by the planner's own ``claimed`` and ``accepted``."""
-    plan = planner.claimed(scene, planner.mean(scene, start)[0])
+    grown, answered = planner.grown_answer(scene, start)  # with mean_margin_m, tried before the plain one
+    plan = grown if answered else planner.claimed(scene, planner.mean(scene, start)[0])
     if not plan.success:
         return plan.reason, float("nan")
     weights = planner.config.weights

@@ -37,7 +37,7 @@ from np_policy.network import ActorCritic
 from np_policy.sampling import PolicyRollouts, choose, clearance_covers_sweep, clearance_level, steerable
 from np_sim.collision import path_valid
 from np_sim.config import EnvConfig
-from np_sim.errors import ConfigError
+from np_sim.errors import ConfigError, StartInCollisionError
 from np_sim.plan import Plan
 from np_sim.scene import Scene
 from np_sim.validate import validation_failure
@@ -118,6 +118,9 @@ class NeuralParkerPlanner:
         std = self.model.log_std.detach().exp().numpy()
         nearest = config.over_capacity == "nearest"
         self.mean = PolicyRollouts(self.actor, np.zeros(2), self.env_config, nearest=nearest)
+        grown = dataclasses.replace(self.env_config, vehicle=self.env_config.vehicle.inflated(config.mean_margin_m))
+        self.grown_mean = (PolicyRollouts(self.actor, np.zeros(2), grown, nearest=nearest)
+                           if config.mean_margin_m else None)
         capped = rollout_env(self.env_config, config.rollout_max_arcs)
         self.sampled = (PolicyRollouts(self.actor, std, capped, config.samples, config.seed, nearest=nearest)
                         if config.samples else None)
@@ -147,15 +150,19 @@ class NeuralParkerPlanner:
         """Roll out the mean action from ``start`` until success, collision or the arc budget (paper §III-A); with
         ``samples``, the best of that and the sampled rollouts (``np_policy.sampling.choose``), then the rescue
         rounds while the best fails or keeps too little clearance (``_rescue_wanted_m``), unless ``accept_mean_m``
-        accepts the mean rollout first; with ``action='sample'``, one rollout of sampled actions. ``Plan.stage``
-        names the stage that gave the plan: 'mean', 'sampled' or 'rescue'."""
+        accepts the mean rollout first (with ``mean_margin_m``, the grown-body mean rollout before the plain one);
+        with ``action='sample'``, one rollout of sampled actions. ``Plan.stage`` names the stage that gave the plan:
+        'mean' (either mean rollout), 'sampled' or 'rescue'."""
         t0 = time.perf_counter()
         if self.single is not None:
             plan = self.claimed(scene, self.single(scene, start, seed=query_seed(self.config.seed, start))[0])
             return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage="sampled")
-        plan, stage = self._mean_rollout(scene, start), "mean"
         anytime = self.config.accept_mean_m is not None
         test_first = self.accept_implies_valid  # an accepted mean rollout needs no claim check
+        grown, answered = self.grown_answer(scene, start)
+        if answered:
+            return dataclasses.replace(grown, plan_time_s=time.perf_counter() - t0, stage="mean")
+        plan, stage = self._mean_rollout(scene, start), "mean"
         if (self.sampled is None or anytime) and not test_first:
             plan = self.claimed(scene, plan)
         if anytime and self.accepted(scene, plan):
@@ -163,7 +170,8 @@ class NeuralParkerPlanner:
         if test_first:
             plan = self.claimed(scene, plan)
         if self.sampled is not None:
-            plan, stage = self._choose_claimed(scene, [plan, *self.sampled(scene, start)], anytime), "sampled"
+            candidates = [plan, *([grown] if grown is not None else []), *self.sampled(scene, start)]
+            plan, stage = self._choose_claimed(scene, candidates, anytime), "sampled"
         for k, rounds in enumerate(self.rescue):
             if plan.success and not self._too_close(scene, plan, self._rescue_wanted_m(k)):
                 break
@@ -178,6 +186,29 @@ class NeuralParkerPlanner:
         rows = plan.sample(self.config.weights.sample_ds_m)
         return (steerable(rows, self.body, self.config.weights)
                 and path_valid(scene, rows[:, :3], "footprint", self.body.inflated(margin)))
+
+    def grown_mean_rollout(self, scene: Scene, start) -> Plan | None:
+        """The mean rollout played with the footprint grown by ``mean_margin_m`` (not validated), or None without
+        one or where the grown body's start is in collision."""
+        if self.grown_mean is None:
+            return None
+        try:
+            return self.grown_mean(scene, start)[0]
+        except StartInCollisionError:
+            return None
+
+    def grown_answer(self, scene: Scene, start) -> tuple[Plan | None, bool]:
+        """(the grown-body mean rollout, validated with the real body, or None; whether the anytime test accepts
+        it). An accepted one is not validated a second time when the test implies the rule."""
+        grown = self.grown_mean_rollout(scene, start)
+        if grown is None:
+            return None, False
+        if self.accept_implies_valid:
+            if self.accepted(scene, grown):
+                return grown, True
+            return self.claimed(scene, grown), False
+        grown = self.claimed(scene, grown)
+        return grown, self.accepted(scene, grown)
 
     def _mean_rollout(self, scene: Scene, start) -> Plan:
         """The paper's planner: the mean action rolled out once (the batch of one with zero noise)."""

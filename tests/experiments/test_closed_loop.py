@@ -127,9 +127,11 @@ def test_footprint_preset_fields_reach_the_planner_and_the_config(tmp_path):
     config = json.loads((out / "config.json").read_text())["config"]["planner"]["neuralparker_footprint"]
     assert config["samples"] == 4 and config["connector"] == "centred" and config["rescue_clearance_m"] == 0.2
     assert config["rescue"] == [[8, 2.0, "policy"], [6, 1.0, "uniform"]] and config["accept_mean_m"] == 0.2
-    assert config["rollout_max_arcs"] == 50 and config["rescue_stop_m"] is None
+    assert config["rollout_max_arcs"] == 50 and config["rescue_stop_m"] is None and config["mean_margin_m"] == 0.2
     table = (out / "table.md").read_text()
-    assert "returns its mean rollout at once when that succeeds, is steerable and keeps 0.2 m of clearance" in table
+    assert ("returns its mean rollout, played first with the body grown by 0.2 m, then as is "
+            "(planner.neuralparker_footprint.mean_margin_m), at once when that succeeds, is steerable and keeps "
+            "0.2 m of clearance") in table
     assert "best of its mean rollout and 4 sampled rollouts" in table and "terminal connector: centred" in table
     assert ("When none of them succeeds or the best keeps less than 0.2 m clearance it samples 8 at 2 σ, then 6 "
             "at 1 σ after a uniform first arc (planner.neuralparker_footprint.rescue)." in table)

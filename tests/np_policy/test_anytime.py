@@ -51,7 +51,7 @@ def _shapely_clearance(scene, rows, body) -> float:
 @pytest.fixture(scope="module")
 def planners():
     policy = Policy.load(CHECKPOINT)
-    return (NeuralParkerPlanner(policy, dataclasses.replace(FOOTPRINT_ANYTIME, **SMALL)),
+    return (NeuralParkerPlanner(policy, dataclasses.replace(FOOTPRINT_ANYTIME, **SMALL, mean_margin_m=0.0)),
             NeuralParkerPlanner(policy, dataclasses.replace(FOOTPRINT_BEST_OF_N, **SMALL,
                                                             rollout_max_arcs=FOOTPRINT_ANYTIME.rollout_max_arcs)))
 
@@ -86,10 +86,12 @@ def test_a_clearance_no_plan_can_keep_sends_every_call_to_the_sampled_rounds(pla
 
 
 def test_the_anytime_preset_is_best_of_n_with_the_wanted_margin_as_its_acceptance_and_an_arc_budget():
-    """'footprint_anytime' is 'footprint_best_of_n' accepting a mean rollout with 0.2 m and cutting its sampled and
-    rescue rollouts at 50 arcs (docs/best_of_n.md, 2026-12-03); 'footprint_best_of_n' keeps the env's 200."""
+    """'footprint_anytime' is 'footprint_best_of_n' accepting a mean rollout with 0.2 m (played with the body grown
+    by 0.2 m first) and cutting its sampled and rescue rollouts at 50 arcs (docs/best_of_n.md, 2026-12-03);
+    'footprint_best_of_n' keeps the env's 200."""
     assert PRESETS["footprint_anytime"] is FOOTPRINT_ANYTIME
-    assert FOOTPRINT_ANYTIME == dataclasses.replace(FOOTPRINT_BEST_OF_N, accept_mean_m=0.2, rollout_max_arcs=50)
+    assert FOOTPRINT_ANYTIME == dataclasses.replace(FOOTPRINT_BEST_OF_N, accept_mean_m=0.2, rollout_max_arcs=50,
+                                                    mean_margin_m=0.2)
     assert FOOTPRINT_BEST_OF_N.rollout_max_arcs is None and FOOTPRINT_ANYTIME.rescue_stop_m is None
     assert FOOTPRINT_ANYTIME.accept_mean_m == FOOTPRINT_ANYTIME.weights.wanted_margin_m
     assert NeuralParkerConfig.from_dict(json.loads(json.dumps(FOOTPRINT_ANYTIME.to_dict()))) == FOOTPRINT_ANYTIME
@@ -124,3 +126,36 @@ def test_clearance_at_samples_covers_the_body_between_them(kappa, ds, theta, gea
     covered = ShapelyPolygon(grown.footprint(start)).union(ShapelyPolygon(grown.footprint(end))).buffer(1e-9)
     for f in np.linspace(0.0, 1.0, 21):
         assert covered.covers(ShapelyPolygon(body.footprint(arc_point(*start, kappa, gear * ds * f))))
+
+
+def _first_frame(seed):
+    clip = generate_clip(seed)
+    start = np.asarray(clip.start, float)
+    return perceived_scene(clip, 0, pose=start), start
+
+
+def test_the_grown_body_mean_rollout_answers_first_and_keeps_the_clearance_with_the_real_body(planners):
+    """Training clip 39 (never a held-out one): the plain mean rollout parks with under 0.1 m to spare, the mean
+    rollout played with the body grown by 0.2 m keeps 0.2 m and answers the call; shapely measures the real body."""
+    anytime, _ = planners
+    grown = NeuralParkerPlanner(anytime.policy, dataclasses.replace(anytime.config, mean_margin_m=0.2))
+    scene, start = _first_frame(39)
+    assert anytime.plan(scene, start).stage != "mean"
+    plan = grown.plan(scene, start)
+    assert plan.stage == "mean" and plan.success
+    np.testing.assert_array_equal(plan.arcs, grown.grown_mean_rollout(scene, start).arcs)
+    assert _shapely_clearance(scene, plan.sample(0.05), grown.body) >= 0.2 - 1e-9
+    assert validation_failure(scene, plan, "footprint", grown.body) == ""
+
+
+def test_where_the_grown_body_cannot_start_the_plain_anytime_answer_stands(planners):
+    """Training clip 35 starts closer than 0.2 m to an object: no grown-body rollout, the same answer as without."""
+    anytime, _ = planners
+    grown = NeuralParkerPlanner(anytime.policy, dataclasses.replace(anytime.config, mean_margin_m=0.2))
+    scene, start = _first_frame(35)
+    assert grown.grown_mean_rollout(scene, start) is None
+    plan, reference = grown.plan(scene, start), anytime.plan(scene, start)
+    assert plan.stage == reference.stage
+    np.testing.assert_array_equal(plan.arcs, reference.arcs)
+    with pytest.raises(ConfigError, match=r"mean_margin_m: .* needs accept_mean_m"):
+        dataclasses.replace(FOOTPRINT_BEST_OF_N, mean_margin_m=0.2)
