@@ -1,7 +1,7 @@
 """Self-imitation of the anytime footprint planner (beyond the paper): fine-tune a site policy's mean action towards
 the plans its own best-of-N planner chooses, so that its mean rollout is accepted on more calls.
 
-``python -m np_policy.distill --checkpoint checkpoints/site_np_footprint.pt --out DIR [--resets 1500]
+``python -m np_policy.distill [--checkpoint checkpoints/site_np_footprint.pt] [--out DIR] [--resets 1500]
 [--epochs 20] [--learning-rate 1e-4] [--seed 0] [--pairs EARLIER/pairs.npz]``
 
 The footprint planner (`np_policy.planner`, preset 'footprint_anytime') answers a call at the price of one rollout
@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import time
 from pathlib import Path
 from typing import Any
 
@@ -204,7 +205,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--checkpoint", type=Path, default=Path("checkpoints/site_np_footprint.pt"),
                         help="site policy to start from (default the shipped footprint-aware one)")
-    parser.add_argument("--out", type=fresh_folder, required=True, help="new or empty folder for the results")
+    parser.add_argument("--out", type=fresh_folder,
+                        help="new or empty folder for the run (default: a fresh results/distill/<timestamp>)")
     parser.add_argument("--resets", type=positive_int, default=1500, help="recorded resets to plan (default 1500)")
     parser.add_argument("--epochs", type=positive_int, default=20, help="passes over the pairs (default 20)")
     parser.add_argument("--learning-rate", type=positive_float, default=1e-4, help="Adam's step size (default 1e-4)")
@@ -212,6 +214,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                         help="fit on the pairs.npz of an earlier run (same --checkpoint) instead of planning again")
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the resets, the hold-out and the shuffling")
     args = parser.parse_args(argv)
+    if args.out is None:
+        args.out = Path("results/distill") / time.strftime("%Y%m%d-%H%M%S")
     args.out.mkdir(parents=True, exist_ok=True)
     summary = distill(args.checkpoint, args.out, args.resets, args.epochs, args.learning_rate, args.seed,
                       pairs=args.pairs)
