@@ -394,6 +394,18 @@ def family_success(results: list[ArmResult]) -> dict[str, dict[str, list[float]]
     return out
 
 
+def family_lines(groups: dict[str, dict[str, list[float]]]) -> list[str]:
+    """Fig. 5's numbers: per measured row, each route-choice family's success (mean ± sample SD over seeds)."""
+    families = ("type1", "type2", "type3")
+    measured = {label: values for label, values in groups.items() if any(values.get(f) for f in families)}
+    if not measured:
+        return []
+    lines = ["| Row | Type 1 | Type 2 | Type 3 |", "|---|---|---|---|"]
+    lines += [f"| {label} | " + " | ".join(fmt(values.get(f, []), 3) for f in families) + " |"
+              for label, values in measured.items()]
+    return lines + [""]
+
+
 def claim_lines(table_label: str, stats, results: list[ArmResult]) -> list[str]:
     """The verdict line of every claim made on ``table_label``."""
     seeds = {r.arm.label: r.seeds_text() for r in results}
@@ -540,8 +552,9 @@ def build_report(runs_root: Path, out_md: Path, evaluate: bool = True) -> str:
     lines += bar_section(GLOBAL_FAMILY, "family-level success on Topology-Stress", family_success(topo),
                          ("type1", "type2", "type3"), figures / FIGURE_FILES[GLOBAL_FAMILY.label],
                          "The paper draws per-family success (240 episodes per family and seed) as bars only. "
-                         + ("" if any(r.records for r in topo) else "Not measurable yet: no Topology-Stress row "
+                         + ("Ours:" if any(r.records for r in topo) else "Not measurable yet: no Topology-Stress row "
                             "has a seed (" + "; ".join(f"{r.arm.label}: {r.seeds_text()}" for r in topo) + ")."))
+    lines += family_lines(family_success(topo))
     lines += table_section(HERMITE, results[HERMITE.label], runs) + cases["fig:hermite-case"]
     lines += table_section(CURRICULUM, results[CURRICULUM.label], runs)
     text = "\n".join(lines).rstrip() + "\n"

@@ -23,8 +23,8 @@ from pathlib import Path
 from typing import Any
 
 from experiments.common import git_commit, run_folder, write_records
-from experiments.paper import (ARMS, HOPE_ACTION, SEEDS, ArmResult, bar_figure, family_success, measure, run_root,
-                               summarise, table_section)
+from experiments.paper import (ARMS, HOPE_ACTION, SEEDS, ArmResult, bar_figure, family_lines, family_success,
+                               measure, run_root, summarise, table_section)
 from experiments.paper_numbers import METRICS, PaperTable
 from experiments.sweep_plan import PAPER_PLAN, active_trainers, expand
 from np_sim.cli import cli_boundary, fresh_folder
@@ -79,7 +79,7 @@ def family_figure(results: list[ArmResult], folder: Path) -> list[str]:
     png = folder / "global_family.png"
     if bar_figure(family_success(results), ("type1", "type2", "type3"), png,
                   "Fig. 5: family-level success, ours (mean ± sample SD; circles: seeds)"):
-        return [f"![fig:global-family]({png.name})", ""]
+        return [f"![fig:global-family]({png.name})", "", *family_lines(family_success(results))]
     return []
 
 

@@ -72,3 +72,12 @@ def test_every_table_module_explains_itself_and_refuses_a_missing_run_root(modul
     assert f"python -m {module.__name__} [--runs DIR]" in help_text(capsys, module.main)
     line = one_error_line(capsys, module.main, ["--runs", str(tmp_path / "absent")])
     assert "expected an existing folder of run folders" in line
+
+
+def test_family_lines_give_each_measured_rows_per_family_success():
+    from experiments.paper import family_lines
+
+    groups = {"A": {"type1": [0.5, 0.7], "type2": [1.0], "type3": []}, "B": {"type1": [], "type2": [], "type3": []}}
+    lines = family_lines(groups)
+    assert lines[2] == "| A | 0.600 ± 0.141 | 1.000 | – |" and len(lines) == 4  # B has no seed: left out
+    assert family_lines({"B": groups["B"]}) == []
