@@ -207,8 +207,9 @@ def measure(arm: Arm, runs: dict, episodes: int, evaluate: bool, active: dict) -
                 result.missing[seed] = "trained, not evaluated yet"
                 continue
             subprocess.run(evaluation_argv(arm, run, folder), check=True, stdout=subprocess.DEVNULL)
-        if stale_protocol(run, folder):
-            result.missing[seed] = stale_protocol(run, folder)
+        stale = stale_protocol(run, folder)
+        if stale:
+            result.missing[seed] = stale
             continue
         rows = read_records(folder / "records.csv")
         if len(rows) != episodes:

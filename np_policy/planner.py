@@ -118,9 +118,9 @@ class NeuralParkerPlanner:
         std = self.model.log_std.detach().exp().numpy()
         nearest = config.over_capacity == "nearest"
         self.mean = PolicyRollouts(self.actor, np.zeros(2), self.env_config, nearest=nearest)
-        grown = dataclasses.replace(self.env_config, vehicle=self.env_config.vehicle.inflated(config.mean_margin_m))
-        self.grown_mean = (PolicyRollouts(self.actor, np.zeros(2), grown, nearest=nearest)
-                           if config.mean_margin_m else None)
+        grown = (dataclasses.replace(self.env_config, vehicle=self.env_config.vehicle.inflated(config.mean_margin_m))
+                 if config.mean_margin_m else None)
+        self.grown_mean = PolicyRollouts(self.actor, np.zeros(2), grown, nearest=nearest) if grown else None
         capped = rollout_env(self.env_config, config.rollout_max_arcs)
         self.sampled = (PolicyRollouts(self.actor, std, capped, config.samples, config.seed, nearest=nearest)
                         if config.samples else None)
@@ -158,16 +158,15 @@ class NeuralParkerPlanner:
             plan = self.claimed(scene, self.single(scene, start, seed=query_seed(self.config.seed, start))[0])
             return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage="sampled")
         anytime = self.config.accept_mean_m is not None
-        test_first = self.accept_implies_valid  # an accepted mean rollout needs no claim check
         grown, answered = self.grown_answer(scene, start)
         if answered:
             return dataclasses.replace(grown, plan_time_s=time.perf_counter() - t0, stage="mean")
         plan, stage = self._mean_rollout(scene, start), "mean"
-        if (self.sampled is None or anytime) and not test_first:
-            plan = self.claimed(scene, plan)
-        if anytime and self.accepted(scene, plan):
-            return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
-        if test_first:
+        if anytime:
+            plan, answered = self._anytime_answer(scene, plan)
+            if answered:
+                return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
+        elif self.sampled is None:
             plan = self.claimed(scene, plan)
         if self.sampled is not None:
             candidates = [plan, *([grown] if grown is not None else []), *self.sampled(scene, start)]
@@ -199,16 +198,19 @@ class NeuralParkerPlanner:
 
     def grown_answer(self, scene: Scene, start) -> tuple[Plan | None, bool]:
         """(the grown-body mean rollout, validated with the real body, or None; whether the anytime test accepts
-        it). An accepted one is not validated a second time when the test implies the rule."""
+        it)."""
         grown = self.grown_mean_rollout(scene, start)
-        if grown is None:
-            return None, False
+        return (None, False) if grown is None else self._anytime_answer(scene, grown)
+
+    def _anytime_answer(self, scene: Scene, plan: Plan) -> tuple[Plan, bool]:
+        """(``plan`` validated, whether the anytime test accepts it); an accepted plan is not validated a second
+        time where the test implies the rule (``accept_implies_valid``)."""
         if self.accept_implies_valid:
-            if self.accepted(scene, grown):
-                return grown, True
-            return self.claimed(scene, grown), False
-        grown = self.claimed(scene, grown)
-        return grown, self.accepted(scene, grown)
+            if self.accepted(scene, plan):
+                return plan, True
+            return self.claimed(scene, plan), False
+        plan = self.claimed(scene, plan)
+        return plan, self.accepted(scene, plan)
 
     def _mean_rollout(self, scene: Scene, start) -> Plan:
         """The paper's planner: the mean action rolled out once (the batch of one with zero noise)."""
