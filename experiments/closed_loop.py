@@ -56,7 +56,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import first, git_commit, run_folder, write_records
+from experiments.common import first, git_state, run_folder, write_records
 from experiments.overrides import apply_overrides
 from experiments.registry import PlannerOptions, build_planners, check_names, label
 from np_sim.cli import cli_boundary, fresh_folder, positive_int, vehicle_spec
@@ -327,7 +327,7 @@ def run(config: ClosedLoopConfig | None = None, out: Path | None = None, rrd: bo
     phases = {"setup": wall0 - start, "drive": wall, "outputs": time.perf_counter() - wall0 - wall}
     (folder / "config.json").write_text(json.dumps(
         {"config": dataclasses.asdict(config), "planners": names, "clips": [clips[k].name for k in indices],
-         "wall_time_s": wall, "phase_times_s": phases, "git_commit": git_commit()}, indent=2, default=str))
+         "wall_time_s": wall, "phase_times_s": phases, **git_state()}, indent=2, default=str))
     return {"records": records, "table": table, "folder": folder, "figure": figure, "rrd": merged,
             "wall_time_s": wall, "phase_times_s": phases, "config": config}
 

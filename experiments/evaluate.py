@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import first, git_commit, mean_sd, run_folder, write_records
+from experiments.common import first, git_state, mean_sd, run_folder, write_records
 from np_policy.config import ACTIONS, PAPER, PRESETS, NeuralParkerConfig
 from np_policy.planner import NeuralParkerPlanner
 from np_sim.benchmarks import frozen_starts, load_benchmark
@@ -83,7 +83,7 @@ def evaluate(benchmark: str, checkpoints: list[Path], config: NeuralParkerConfig
                                                     "checkpoints": [str(p) for p in checkpoints],
                                                     "neuralparker": config.to_dict(), "vehicle": vehicle.to_dict(),
                                                     "episodes": len(episodes),
-                                                    "git_commit": git_commit()}, indent=2))
+                                                    **git_state()}, indent=2))
     return {"records": records, "table": table, "folder": folder}
 
 

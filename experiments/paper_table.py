@@ -22,7 +22,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from experiments.common import git_commit, run_folder, write_records
+from experiments.common import git_state, run_folder, write_records
 from experiments.paper import (ARMS, HOPE_ACTION, SEEDS, ArmResult, bar_figure, family_lines, family_success,
                                measure, run_root, summarise, table_section)
 from experiments.paper_numbers import METRICS, PaperTable
@@ -70,7 +70,7 @@ def run(paper: PaperTable, experiment: str, runs_root: Path = Path("checkpoints/
         "table": paper.label, "runs": str(runs_root), "evaluate": evaluate, "hope_action": HOPE_ACTION,
         "rows": {r.arm.label: {"configuration": r.arm.configuration, "evaluation": r.arm.evaluation,
                                "seeds": r.seeds_text()} for r in results},
-        "git_commit": git_commit()}, indent=2))
+        **git_state()}, indent=2))
     return {"results": results, "table": table, "folder": folder}
 
 

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import first, git_commit, run_folder, write_records
+from experiments.common import first, git_state, run_folder, write_records
 from experiments.registry import PlannerOptions, build_planners, check_names, label
 from experiments.scene_files import (add_scene_arguments, describe, episode_scenes, load_scene_files, scene_columns,
                                      starts_summary, strictest)
@@ -103,7 +103,7 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
                  "seed": hope_seed},
         "hybrid_astar": {k: v for k, v in vars(planners.get("hybrid_astar", HybridAStar()).config).items()
                          if k != "vehicle"},
-        "git_commit": git_commit()}, indent=2, default=str))
+        **git_state()}, indent=2, default=str))
     return {"records": records, "table": table, "folder": folder, "starts": starts_summary(files)}
 
 

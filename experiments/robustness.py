@@ -52,7 +52,7 @@ from tqdm import tqdm
 
 from experiments.closed_loop import (CLIP_SPLITS, PLANNERS, SITE_PLANNERS, ClosedLoopConfig, default_workers,
                                      planner_names)
-from experiments.common import git_commit, run_folder
+from experiments.common import git_state, run_folder
 from experiments.overrides import apply_overrides
 from experiments.registry import PlannerOptions, build_planners, check_names
 from experiments.robustness_report import FailureCase, factor_figure, failure_cases, format_table
@@ -394,7 +394,7 @@ def main(argv=None) -> dict[str, Any]:
         (folder / "config.json").write_text(json.dumps(
             {"argv": _study_argv(argv), "config": dataclasses.asdict(spec), "planners": names,
              "factors": args.factors, "levels": args.levels, "seed": args.seed, f"{source.noun}s": source.units,
-             "git_commit": git_commit()}, indent=2, default=str))
+             **git_state()}, indent=2, default=str))
     start = time.perf_counter()
     run_jobs(jobs, names, spec, args.seed, log, args.workers or default_workers(), args.ray_address)
     rows = log.rows()

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from experiments.common import git_commit, run_folder, write_records
+from experiments.common import git_state, run_folder, write_records
 from experiments.registry import REGISTRY, PlannerOptions, build_planners, check_names, label
 from experiments.scene_files import scene_file, strictest
 from np_sim.cli import cli_boundary, fresh_folder, non_negative_int, vehicle_spec
@@ -177,7 +177,7 @@ def run_scene(path: Path, start=None, planners: list[str] | None = None,
          "planners": list(built), "skipped": skipped, "checkpoint": str(checkpoint),
          "footprint_checkpoint": str(footprint_checkpoint), "hope_checkpoint": str(hope_checkpoint),
          "convention": convention, "vehicle": vehicle.to_dict(), "controller": controller, "render": render,
-         "git_commit": git_commit()}, indent=2))
+         **git_state()}, indent=2))
     return {"records": records, "table": table, "start": pose, "folder": folder}
 
 

@@ -59,9 +59,18 @@ def _kill_with_parent() -> None:
     ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
 
 
-def train_run(run: RunSpec, log_path: Path) -> dict[str, Any]:
-    """Train (or resume) one run in a ``python -m np_policy.train`` subprocess; returns its exit status and the
-    tail of its log. This is the body of the sweep's Ray task."""
+def run_environment(cpus: float) -> dict[str, str]:
+    """The trainer subprocess's environment: this process's, with torch's and numba's thread counts
+    (``OMP_NUM_THREADS``, ``NUMBA_NUM_THREADS``) set to the run's CPUs. Ray sets only the first; numba would start
+    a thread per core and raise torch's count with it (`np_policy.train.use_threads`), so runs sharing a machine
+    would each spin on every core."""
+    threads = str(max(1, int(cpus)))
+    return {**os.environ, "OMP_NUM_THREADS": threads, "NUMBA_NUM_THREADS": threads}
+
+
+def train_run(run: RunSpec, log_path: Path, cpus: float) -> dict[str, Any]:
+    """Train (or resume) one run in a ``python -m np_policy.train`` subprocess on ``cpus`` threads; returns its
+    exit status and the tail of its log. This is the body of the sweep's Ray task."""
     log_path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="sweep-") as tmp:
         config_file = Path(tmp) / f"{run.name}.json"
@@ -72,7 +81,7 @@ def train_run(run: RunSpec, log_path: Path) -> dict[str, Any]:
             log.flush()
             preexec = _kill_with_parent if sys.platform.startswith("linux") else None
             rc = subprocess.run(argv, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                preexec_fn=preexec, check=False).returncode
+                                preexec_fn=preexec, env=run_environment(cpus), check=False).returncode
     tail = log_path.read_text(errors="replace")[-2000:]
     return {"run": run.name, "rc": rc, "log": str(log_path), "tail": tail}
 
@@ -125,7 +134,7 @@ def run_sweep(todo: list[RunSpec], args) -> list[dict[str, Any]]:
         ray.shutdown()
         raise
     task = ray.remote(max_retries=1)(train_run).options(num_cpus=cpus, num_gpus=gpus)
-    pending = {task.remote(run, Path(args.log_dir).resolve() / f"{run.name}.log"): run for run in todo}
+    pending = {task.remote(run, Path(args.log_dir).resolve() / f"{run.name}.log", cpus): run for run in todo}
     print(f"sweep: {len(todo)} run(s) on Ray ({cpus:g} CPU, {gpus:g} GPU per run)", flush=True)
     since = time.time()
     results = []

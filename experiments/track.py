@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import first, git_commit, run_folder, write_records
+from experiments.common import first, git_state, run_folder, write_records
 from experiments.registry import PlannerOptions, build_planners, check_names
 from experiments.scene_files import (add_scene_arguments, describe, episode_scenes, load_scene_files, scene_columns,
                                      starts_summary)
@@ -100,7 +100,7 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
          "checkpoint": str(checkpoint),
          "controllers": list(controllers), "episodes": len(episodes), "per_scene": per_scene, "limit": limit,
          "rrd_episodes": rrd_episodes,
-         "render": render, "git_commit": git_commit()}, indent=2))
+         "render": render, **git_state()}, indent=2))
     return {"records": records, "table": table, "folder": folder, "starts": starts_summary(files)}
 
 

@@ -124,6 +124,19 @@ def recorded_clips(skip: int) -> list:
     return difficult[skip:]
 
 
+def use_threads(n: int) -> None:
+    """Run torch and numba's parallel env loops on ``n`` threads each (numba's at most ``NUMBA_NUM_THREADS``; 0
+    leaves both at their defaults, all cores). Setting torch alone did not hold: numba's OpenMP layer sets the
+    process's OpenMP thread count to its own when its first parallel loop starts, after which torch ran on all
+    cores too, and a run meant to share a 2-core machine with another job spun two threads in every update (an
+    epoch about 10× slower)."""
+    if n:
+        import numba
+
+        numba.set_num_threads(min(n, numba.config.NUMBA_NUM_THREADS))
+        torch.set_num_threads(n)
+
+
 class Trainer:
     """State of one training run: model, optimiser, envs, statistics, counters."""
 
@@ -131,8 +144,7 @@ class Trainer:
         self.config = config
         self.out = Path(out)
         ppo = config.ppo
-        if config.torch_threads:
-            torch.set_num_threads(config.torch_threads)
+        use_threads(config.torch_threads)
         torch.manual_seed(config.seed)
         env = config.training_env()
         if config.benchmark == "site":

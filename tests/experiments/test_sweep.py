@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from experiments.sweep import main, train_argv
+from experiments.sweep import main, run_environment, train_argv
 from experiments.sweep_plan import PAPER_PLAN, active_trainers, expand, load_plan, resolved_config, run_state
 
 pytestmark = pytest.mark.sweep
@@ -95,6 +95,15 @@ def test_each_state_gets_the_train_flags_that_continue_it(tmp_path):
     assert run_state(run).kind == "started, no snapshot" and flags() == ["--overwrite"]
     (run.run_dir / "snapshot.pt").write_bytes(b"x")
     assert run_state(run).kind == "interrupted" and flags() == ["--resume"]
+
+
+def test_a_run_trains_on_as_many_torch_and_numba_threads_as_it_has_cpus(monkeypatch):
+    monkeypatch.setenv("OMP_NUM_THREADS", "8")
+    monkeypatch.setenv("SOMETHING_ELSE", "kept")
+    env = run_environment(1.0)
+    assert (env["OMP_NUM_THREADS"], env["NUMBA_NUM_THREADS"], env["SOMETHING_ELSE"]) == ("1", "1", "kept")
+    assert run_environment(2.5)["NUMBA_NUM_THREADS"] == "2"  # Ray may hand out fractions; at least one thread
+    assert run_environment(0.5)["OMP_NUM_THREADS"] == "1"
 
 
 def test_bad_arguments_are_one_error_line(tmp_path, capsys):

@@ -1,6 +1,9 @@
 """Training loop: tiny-budget smoke run, kill-and-resume equality on CPU, checkpoint errors."""
 
 import hashlib
+import os
+import subprocess
+import sys
 import json
 import re
 import shutil
@@ -504,3 +507,27 @@ def _pose_with_clearance(scene, vehicle, wanted, pose):
             lo, hi = (mid, hi) if _clearance(scene, pose + mid * direction, vehicle) > wanted else (lo, mid)
         return pose + lo * direction
     raise AssertionError("no obstacle within 5 m on either side")
+
+
+THREADS_PROBE = """
+import json, sys, torch
+import np_policy.train as t
+seen = []
+update = t.ppo_update
+def counted(*args, **kwargs):
+    seen.append(torch.get_num_threads())
+    return update(*args, **kwargs)
+t.ppo_update = counted
+config = t.TrainConfig.from_dict({**json.loads(sys.argv[1]), "torch_threads": 1})
+t.train(config, sys.argv[2], epochs=1, progress=False)
+print(json.dumps(sorted(set(seen))))
+"""
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: numba's default is one thread anyway")
+def test_a_one_thread_run_updates_on_one_thread_after_numba_started_its_loops(tmp_path):
+    """In a fresh process (numba's thread pool not started yet): the env steps run numba's parallel loops, whose
+    OpenMP start used to raise torch's thread count to every core, so a 'torch_threads: 1' run updated on two."""
+    out = subprocess.run([sys.executable, "-c", THREADS_PROBE, json.dumps(TINY), str(tmp_path / "run")],
+                         capture_output=True, text=True, check=True)
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == [1]
