@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from np_sim.kernels.kinematics import arc_point
+from np_sim.kernels.kinematics import sample_arcs
 from np_sim.metrics import plan_metrics
 
 
@@ -69,23 +69,11 @@ class Plan:
         """(M, 6) rows x, y, θ, steer_curvature, gear, s at spacing ≤ ``ds`` (m) along the plan, start included."""
         if not ds > 0:
             raise ValueError(f"Plan.sample: ds must be > 0, got {ds}")
-        rows = [[*np.asarray(self.start, float), 0.0, 0.0, 0.0]]
         x, y, th = (float(v) for v in self.start)
-        s = 0.0
-        for kappa, length in np.asarray(self.arcs, float).reshape(-1, 2):
-            n = max(1, math.ceil(abs(length) / ds))
-            gear = float(np.sign(length))
-            steer = -gear * kappa
-            if rows[-1][4] == 0.0:
-                rows[-1][3:5] = [steer, gear]
-            for j in range(1, n + 1):
-                px, py, pth = arc_point(x, y, th, kappa, length * j / n)
-                rows.append([px, py, pth, steer, gear, s + abs(length) * j / n])
-            x, y, th = rows[-1][:3]
-            s += abs(length)
-        out = np.array(rows)
+        arcs = np.ascontiguousarray(np.asarray(self.arcs, float).reshape(-1, 2))
+        out, length = sample_arcs(x, y, th, arcs, float(ds))
         if self.hermite is not None:
-            hermite = self._hermite_rows(ds, s, out[-1, :3])
+            hermite = self._hermite_rows(ds, length, out[-1, :3])
             if out[-1, 4] == 0.0:
                 out[-1, 3:5] = hermite[0, 3:5]
             out = np.vstack([out, hermite[1:]])

@@ -57,3 +57,32 @@ def sample_arc_into(x: float, y: float, th: float, kappa: float, length: float, 
         out[j, 0] = px
         out[j, 1] = py
         out[j, 2] = pth
+
+
+@njit(cache=True, error_model="numpy")
+def sample_arcs(x: float, y: float, th: float, arcs: np.ndarray, ds: float):
+    """(rows, length): (M, 6) rows x, y, θ, steer curvature, gear, s along the arcs (K, 2) of (κ, l) from (x, y, θ)
+    (paper eq:arc) — the start, then each arc at ⌈|l|/ds⌉ (at least one) equal steps, its end included; a row's
+    steer curvature is −gear·κ of the arc it ends (the start row takes the first arc's), gear = sgn(l) (0 for a
+    zero-length arc), s the distance travelled — and the total length Σ|l| summed in arc order. The arcs part of
+    `np_sim.plan.Plan.sample`, without a Python call per row."""
+    counts = np.empty(arcs.shape[0], np.int64)
+    for i in range(arcs.shape[0]):
+        counts[i] = max(1, math.ceil(abs(arcs[i, 1]) / ds))
+    rows = np.zeros((1 + counts.sum(), 6))
+    rows[0, 0], rows[0, 1], rows[0, 2] = x, y, th
+    k, s = 0, 0.0
+    for i in range(arcs.shape[0]):
+        kappa, length, n = arcs[i, 0], arcs[i, 1], counts[i]
+        gear = 1.0 if length > 0.0 else (-1.0 if length < 0.0 else 0.0)
+        steer = -gear * kappa
+        if rows[k, 4] == 0.0:
+            rows[k, 3], rows[k, 4] = steer, gear
+        for j in range(1, n + 1):
+            px, py, pth = arc_point(x, y, th, kappa, length * j / n)
+            rows[k + j, 0], rows[k + j, 1], rows[k + j, 2] = px, py, pth
+            rows[k + j, 3], rows[k + j, 4], rows[k + j, 5] = steer, gear, s + abs(length) * j / n
+        k += n
+        x, y, th = rows[k, 0], rows[k, 1], rows[k, 2]
+        s += abs(length)
+    return rows, s

@@ -4,6 +4,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from np_sim.hermite import connect
 from np_sim.kinematics import arc_step
@@ -90,3 +92,34 @@ def test_hermite_points_that_are_not_one_cubic_are_an_error():
     seg = HermiteSegment(points=pts, forward=True, length=14.0, delta_kappa=0.0)
     with pytest.raises(ValueError, match="not samples of one cubic"):
         Plan(start=np.array([0.0, 5.0, 0.0]), hermite=seg, success=True).sample(0.1)
+
+
+CURVATURES = st.floats(-0.68, 0.68).filter(lambda k: k == 0 or abs(k) > 1e-3)
+ARC_LENGTHS = st.tuples(st.floats(0.01, 8.0), st.sampled_from([-1.0, 1.0])).map(lambda lg: lg[0] * lg[1])
+
+
+@settings(max_examples=200, deadline=None)
+@given(start=st.tuples(*[st.floats(-50, 50)] * 2, st.floats(-math.pi, math.pi)),
+       arcs=st.lists(st.tuples(CURVATURES, ARC_LENGTHS), min_size=1, max_size=5),
+       ds=st.sampled_from([0.05, 0.1, 0.3]))
+def test_sampled_rows_lie_on_their_arcs_circles_at_the_spacing_asked(start, arcs, ds):
+    """Every row of an arc is on that arc's circle of radius 1/|κ| about the centre eq:arc turns around (a line for
+    κ = 0), steps are ≤ ds and the arc's ⌈|l|/ds⌉ of them, gear sgn(l), steer −sgn(l)κ (spec §2)."""
+    rows = Plan(start=np.array(start), arcs=np.array(arcs), success=True).sample(ds)
+    k, (x, y, th) = 0, start
+    for kappa, length in arcs:
+        n = max(1, math.ceil(abs(length) / ds))
+        part = rows[k + 1:k + n + 1]
+        gear = np.sign(length)
+        if kappa != 0.0:  # eq:arc turns about the point 1/κ right of the heading driving forward, left in reverse
+            cx, cy = x + gear * math.sin(th) / kappa, y - gear * math.cos(th) / kappa
+            np.testing.assert_allclose(np.hypot(part[:, 0] - cx, part[:, 1] - cy), 1 / abs(kappa),
+                                       rtol=1e-9, atol=1e-9)
+        else:
+            np.testing.assert_allclose((part[:, 0] - x) * math.sin(th) - (part[:, 1] - y) * math.cos(th), 0.0,
+                                       atol=1e-9)
+        assert np.all(part[:, 4] == gear) and np.all(part[:, 3] == -gear * kappa)
+        assert np.all(np.diff(rows[k:k + n + 1, 5]) <= ds + 1e-12)
+        k += n
+        x, y, th = rows[k, :3]
+    assert len(rows) == k + 1 and rows[-1, 5] == pytest.approx(sum(abs(length) for _, length in arcs))
