@@ -137,6 +137,13 @@ def use_threads(n: int) -> None:
         torch.set_num_threads(n)
 
 
+def thread_counts() -> dict[str, int]:
+    """The threads this process trains on: torch's and numba's counts (each epoch's metrics row records them)."""
+    import numba
+
+    return {"torch_threads": torch.get_num_threads(), "numba_threads": numba.get_num_threads()}
+
+
 class Trainer:
     """State of one training run: model, optimiser, envs, statistics, counters."""
 
@@ -404,7 +411,8 @@ def check_epochs(epochs: Any, ppo: PPOConfig) -> int:
 
 
 def _resume(trainer: Trainer, config: TrainConfig, out: Path, last: int) -> list[dict[str, Any]]:
-    """Restore ``trainer`` from ``out/snapshot.pt`` and return the metrics rows up to its epoch."""
+    """Restore ``trainer`` from ``out/snapshot.pt`` and return the metrics rows up to its epoch; a warning when this
+    process trains on other thread counts than the last row records."""
     snapshot = out / "snapshot.pt"
     payload = load_checkpoint(snapshot)
     missing = sorted(set(trainer.state()) - set(payload) - {"init_checkpoint"})
@@ -415,7 +423,14 @@ def _resume(trainer: Trainer, config: TrainConfig, out: Path, last: int) -> list
     trainer.restore(payload, snapshot)
     if last < trainer.epoch:
         raise ConfigError(f"train: --epochs {last}: the snapshot is already at epoch {trainer.epoch}")
-    return [r for r in read_metrics(out / "metrics.jsonl") if r["epoch"] <= trainer.epoch]
+    rows = [r for r in read_metrics(out / "metrics.jsonl") if r["epoch"] <= trainer.epoch]
+    before = {k: rows[-1][k] for k in thread_counts() if rows and k in rows[-1]}
+    now = {k: v for k, v in thread_counts().items() if k in before}
+    if before != now:  # a reduction split over other threads differs in its last bits
+        print(f"warning: {out}: resuming on {now} where the run so far trained on {before}: its curve will differ "
+              f"from an uninterrupted run's in the last bits (set OMP_NUM_THREADS and NUMBA_NUM_THREADS to match)",
+              file=sys.stderr)
+    return rows
 
 
 def _train_epoch(trainer: Trainer) -> dict[str, Any]:
@@ -445,7 +460,7 @@ def _train_epoch(trainer: Trainer) -> dict[str, Any]:
             "train_return": float(np.mean(returns)) if returns else float("nan"),
             "train_success": float(np.mean(successes)) if successes else float("nan"),
             "episodes": len(returns), "curriculum_fraction": trainer.sampler.fraction,
-            "selection_reward": selection, "selection_success": selection_success, **stats}
+            "selection_reward": selection, "selection_success": selection_success, **stats, **thread_counts()}
 
 
 def finished_rows(out: Path, config: TrainConfig) -> list[dict[str, Any]] | None:

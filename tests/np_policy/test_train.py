@@ -531,3 +531,19 @@ def test_a_one_thread_run_updates_on_one_thread_after_numba_started_its_loops(tm
     out = subprocess.run([sys.executable, "-c", THREADS_PROBE, json.dumps(TINY), str(tmp_path / "run")],
                          capture_output=True, text=True, check=True)
     assert json.loads(out.stdout.strip().splitlines()[-1]) == [1]
+
+
+def test_rows_record_the_thread_counts_and_a_resume_on_others_warns(tmp_path, capsys, monkeypatch):
+    import np_policy.train as train_module
+
+    config = TrainConfig.from_dict(TINY)
+    train(config, tmp_path / "run", epochs=2, progress=False)
+    rows = [json.loads(line) for line in (tmp_path / "run" / "metrics.jsonl").read_text().splitlines()]
+    assert all(r["torch_threads"] == torch.get_num_threads() >= 1 and r["numba_threads"] >= 1 for r in rows)
+    capsys.readouterr()
+    train(config, tmp_path / "run", epochs=3, resume=True, progress=False)  # the same counts: no warning
+    assert "resuming on" not in capsys.readouterr().err
+    monkeypatch.setattr(train_module, "thread_counts",
+                        lambda: {"torch_threads": rows[-1]["torch_threads"] + 1, "numba_threads": 1})
+    train(config, tmp_path / "run", epochs=4, resume=True, progress=False)
+    assert "resuming on {'torch_threads': " in capsys.readouterr().err
