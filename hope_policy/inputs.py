@@ -14,6 +14,7 @@ from gymnasium import spaces
 
 from hope_policy.config import HopeEnvConfig
 from hope_policy.network import Modalities
+from hope_policy.spaces import vertex_shapes
 from np_policy.bev_encoder import load_frozen_encoder
 from np_sim.errors import ConfigError
 
@@ -22,6 +23,7 @@ class PolicyInputs:
     """Raw observations → network inputs (module docstring), and the network's input branches."""
 
     def __init__(self, env: HopeEnvConfig, bev_encoder_file: str = ""):
+        self.env = env
         self.encoder = None
         if env.added_input == "bev":
             self.encoder = load_frozen_encoder(bev_encoder_file)
@@ -31,9 +33,10 @@ class PolicyInputs:
 
     def modalities(self, space: spaces.Dict) -> Modalities:
         """The network's input branches for an observation space: each key with its flat size, the BEV raster with
-        its encoder's latent size."""
+        its encoder's latent size, the vertices with their slots."""
+        slots = tuple(vertex_shapes(self.env).values()) if "vertices" in space.spaces else ()
         return Modalities(tuple((key, self.encoder.latent_dim if key == "bev" else int(np.prod(box.shape)))
-                                for key, box in space.spaces.items()))
+                                for key, box in space.spaces.items()), vertex_slots=slots)
 
     def __call__(self, obs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         """A batch of observations (each key ``(n, ...)``) with the BEV images replaced by their latents."""

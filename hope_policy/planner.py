@@ -78,7 +78,7 @@ class HopePlanner:
         inputs = PolicyInputs(config.env, config.bev_encoder_file)
         model = HopeActorCritic(inputs.modalities(space))
         load_weights(model, payload["model"], path)
-        normaliser = ObservationNormaliser({key: box.shape for key, box in space.spaces.items()})
+        normaliser = ObservationNormaliser.for_space(space, config.env)
         try:
             normaliser.load_state_dict(payload["obs_norm"])
         except (KeyError, ValueError) as exc:

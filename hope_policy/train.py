@@ -148,7 +148,7 @@ class HopeTrainer:
         self.inputs = PolicyInputs(config.env, config.bev_encoder_file)
         self.model = HopeActorCritic(self.inputs.modalities(space))
         self.ppo = HopePPO(self.model, config.ppo)
-        self.normaliser = ObservationNormaliser({key: box.shape for key, box in space.spaces.items()})
+        self.normaliser = ObservationNormaliser.for_space(space, config.env)
         self.shuffle = np.random.default_rng(config.seed)
         self.action_rng = np.random.default_rng([config.seed, 1])
         self.updates = self.episodes = self.env_steps = 0
@@ -177,7 +177,7 @@ class HopeTrainer:
             self.sampler.set_progress(self.episodes / self.config.episodes, self.config.env.curriculum)
         obs, _ = self.envs.reset(seed=collect_seed(self.config.seed, self.updates))
         obs = self.inputs(obs)
-        if self.normaliser.stats and all(s.count == 0 for s in self.normaliser.stats.values()):
+        if self.normaliser.stats and all(s.empty for s in self.normaliser.stats.values()):
             self.normaliser.update(obs)  # HOPE initialises its statistics with the first observation
         steps: list[dict[str, Any]] = []
         for _ in range(T):

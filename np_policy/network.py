@@ -53,7 +53,8 @@ from np_sim.observation import observation_sections, observation_size
 from np_policy.config import NetworkConfig
 
 
-def _mlp(sizes: list[int], activate_last: bool = False) -> nn.Sequential:
+def mlp(sizes: list[int], activate_last: bool = False) -> nn.Sequential:
+    """Linear layers of ``sizes`` with a ReLU between two (and after the last with ``activate_last``)."""
     layers: list[nn.Module] = []
     for i, (a, b) in enumerate(zip(sizes[:-1], sizes[1:])):
         layers.append(nn.Linear(a, b))
@@ -111,10 +112,10 @@ class SceneEncoder(nn.Module):
         self.obs_size = observation_size(obs_config)
         h, d, t = net.stream_hidden, net.fusion_dim, net.token_dim
 
-        self.ego = _mlp([self.sections["ego"][1] - self.sections["ego"][0], h, d])
-        self.lidar = _mlp([obs_config.n_beams, h, d]) if "lidar" in self.sections else None
-        self.obstacle = _mlp([2 * obs_config.vertices_per_obstacle, h, t]) if "obstacles" in self.sections else None
-        self.boundary = _mlp([4, h, t]) if "boundary" in self.sections else None
+        self.ego = mlp([self.sections["ego"][1] - self.sections["ego"][0], h, d])
+        self.lidar = mlp([obs_config.n_beams, h, d]) if "lidar" in self.sections else None
+        self.obstacle = mlp([2 * obs_config.vertices_per_obstacle, h, t]) if "obstacles" in self.sections else None
+        self.boundary = mlp([4, h, t]) if "boundary" in self.sections else None
         n_slots = (obs_config.max_obstacles if self.obstacle is not None else 0) + (
             obs_config.max_boundary_segments if self.boundary is not None else 0)
         self.n_slots = n_slots
@@ -122,7 +123,7 @@ class SceneEncoder(nn.Module):
             self.slot_position = nn.Parameter(torch.randn(n_slots, t) * 0.02)
             self.geometry_attention = SelfAttentionBlock(t, net.token_heads, net.token_ff_dim)
             self.geometry_summary = nn.Linear(t, d)
-        self.bev = _mlp([obs_config.bev_latent_dim, h, d]) if "bev" in self.sections else None
+        self.bev = mlp([obs_config.bev_latent_dim, h, d]) if "bev" in self.sections else None
         self.n_tokens = 1 + (self.lidar is not None) + (n_slots > 0) + (self.bev is not None)
         self.fusion = nn.Sequential(*[SelfAttentionBlock(d, net.fusion_heads, net.fusion_ff_dim)
                                       for _ in range(net.fusion_depth)])
@@ -170,8 +171,8 @@ class ActorCritic(nn.Module):
         self.net_config = net
         self.encoder = SceneEncoder(obs_config, net)
         d = self.encoder.feature_dim
-        self.actor = _mlp([d, *net.head_hidden, net.action_dim])
-        self.critic = _mlp([d, *net.head_hidden, 1])
+        self.actor = mlp([d, *net.head_hidden, net.action_dim])
+        self.critic = mlp([d, *net.head_hidden, 1])
         self.log_std = nn.Parameter(torch.full((net.action_dim,), float(net.init_log_std)))
         self._init_weights()
 

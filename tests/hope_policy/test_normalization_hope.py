@@ -63,3 +63,57 @@ def test_state_round_trip_and_mismatch():
         ObservationNormaliser({"lidar": (2,)}).load_state_dict(norm.state_dict())
     with pytest.raises(ValueError, match="expected a batch of shape"):
         RunningMeanStd((2,)).update(np.zeros((3, 4)))
+
+
+SENTINEL = -1e4
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), sizes=st.lists(st.integers(1, 7), min_size=1, max_size=8),
+       empty=st.floats(0.0, 0.9))
+def test_padding_is_left_out_of_the_statistics_feature_by_feature(seed, sizes, empty):
+    """Each feature's statistics equal numpy's over its real entries only, whatever share of the stream pads it and
+    however the stream is split; padded entries come out unchanged, real ones as (x − mean) / (std + ε)."""
+    rng = np.random.default_rng(seed)
+    batches = [np.where(rng.random((n, 4)) < empty, SENTINEL, rng.normal(5.0, 2.0, size=(n, 4))) for n in sizes]
+    stats = RunningMeanStd((4,), padding=SENTINEL)
+    for batch in batches:
+        stats.update(batch)
+    stream = np.concatenate(batches)
+    for f in range(4):
+        real = stream[:, f][stream[:, f] != SENTINEL]
+        assert stats.count[f] == len(real)
+        if len(real):
+            assert stats.mean[f] == pytest.approx(real.mean(), rel=1e-9)
+            assert stats.std[f] == pytest.approx(real.std(), rel=1e-7, abs=1e-9)
+    x = np.array([[SENTINEL, 5.0, SENTINEL, 1.0]])
+    out = stats.normalise(x)
+    assert out[0, 0] == out[0, 2] == np.float32(SENTINEL)
+    np.testing.assert_allclose(out[0, [1, 3]], (x[0, [1, 3]] - stats.mean[[1, 3]]) / (stats.std[[1, 3]] + EPS),
+                               rtol=1e-5)
+
+
+def test_a_slot_empty_in_most_scenes_keeps_its_coordinates_apart():
+    """The defect this replaced: counting the padding made a slot filled in one scene of ten normalise every real
+    coordinate in it to nearly the same value."""
+    filled = np.array([[-3.0], [4.0]])
+    stream = np.vstack([filled, np.full((18, 1), SENTINEL)])
+    padded, counted = RunningMeanStd((1,), padding=SENTINEL), RunningMeanStd((1,))
+    padded.update(stream)
+    counted.update(stream)
+    assert np.ptp(padded.normalise(filled)) == pytest.approx(2.0)  # (4 − (−3)) / 3.5: one std apart on each side
+    assert np.ptp(counted.normalise(filled)) < 0.003
+
+
+def test_padded_statistics_round_trip_and_refuse_statistics_made_the_other_way():
+    shapes = {"lidar": (2,), "vertices": (3,)}
+    norm = ObservationNormaliser(shapes, padding={"vertices": SENTINEL})
+    norm.update({"lidar": np.ones((2, 2)), "vertices": np.array([[1.0, SENTINEL, 2.0], [3.0, SENTINEL, SENTINEL]])})
+    other = ObservationNormaliser(shapes, padding={"vertices": SENTINEL})
+    other.load_state_dict(norm.state_dict())
+    x = {"lidar": np.ones((1, 2)), "vertices": np.array([[2.0, SENTINEL, 7.0]])}
+    np.testing.assert_array_equal(other(x)["vertices"], norm(x)["vertices"])
+    with pytest.raises(ValueError, match="count has shape"):
+        ObservationNormaliser(shapes).load_state_dict(norm.state_dict())
+    with pytest.raises(ValueError, match="count has shape"):
+        norm.load_state_dict(ObservationNormaliser(shapes).state_dict())
