@@ -13,7 +13,8 @@ folder (``eval_<benchmark>/records.csv``: the checkpoint's own connector, `exper
 method of `experiments.planners` for an adapted-HOPE checkpoint; ``eval_<benchmark>_ensemble/``: the ensemble
 connector swapped in at evaluation only; ``eval_<benchmark>_staged/``: the Hybrid A* → NP planner,
 `experiments.planners`). A
-finished run without records is evaluated here (``--no-evaluate``: reported as not evaluated); a run that is not
+finished run without records is evaluated here (``--no-evaluate``: reported as not evaluated; an evaluation
+killed mid-way continues where it stopped, `experiments.progress`); a run that is not
 finished is named with its state ("0 of 3 seeds: not trained yet"), never left out. Success is on the full set,
 L, reversals and Δκ (eq:metrics) on the within-seed common-success cohort of the rows measured, each the mean ±
 sample SD over seeds. Each of the paper's claims gets one verdict (`claim_verdict`). Compute per table: training
@@ -38,6 +39,7 @@ from matplotlib.figure import Figure
 
 from experiments import hermite_case, overview_case, scenes
 from experiments.common import run_folder
+from experiments.progress import holds_progress
 from experiments.paper_numbers import (CURRICULUM, GLOBAL_FAMILY, HERMITE, HIGHER_IS_BETTER, MAIN_COMPARISON,
                                        METRIC_NAMES, METRICS, TOPOLOGY_STRESS, TWOSTAGE, PaperTable)
 from experiments.sweep_plan import PAPER_PLAN, TRAINERS, RunSpec, active_trainers, expand, run_state
@@ -200,13 +202,15 @@ def measure(arm: Arm, runs: dict, episodes: int, evaluate: bool, active: dict) -
             result.missing[seed] = evaluation_missing(arm, run)
             continue
         if not (folder / "records.csv").exists():
-            if folder.exists() and any(folder.iterdir()):
+            resumable = holds_progress(folder)  # a killed experiments.planners run continues where it stopped
+            if folder.exists() and any(folder.iterdir()) and not resumable:
                 result.missing[seed] = f"trained; {folder} holds an interrupted evaluation (remove it to re-run)"
                 continue
             if not evaluate:
-                result.missing[seed] = "trained, not evaluated yet"
+                result.missing[seed] = "trained, " + ("evaluation interrupted" if resumable else "not evaluated yet")
                 continue
-            subprocess.run(evaluation_argv(arm, run, folder), check=True, stdout=subprocess.DEVNULL)
+            argv = evaluation_argv(arm, run, folder) + (["--resume"] if resumable else [])
+            subprocess.run(argv, check=True, stdout=subprocess.DEVNULL)
         stale = stale_protocol(run, folder)
         if stale:
             result.missing[seed] = stale

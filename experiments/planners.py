@@ -2,7 +2,7 @@
 ``tab:twostage``, §V-F).
 
 ``python -m experiments.planners --benchmark factorial|topology [--checkpoint PATH] [--methods ...]
-[--convention reference_point|footprint] [--vehicle sedan|van|FILE] [--limit N] [--out DIR]
+[--convention reference_point|footprint] [--vehicle sedan|van|FILE] [--limit N] [--out DIR [--resume]]
 [--scenes FILE... [--starts N] [--seed S]]``
 
 Methods: Hybrid A*, NP-Guided A* (Hybrid A* guided by one NeuralParker rollout), the OMPL peer (RRT* in a
@@ -18,7 +18,9 @@ checkpoint's convention). ``--vehicle`` plans for another vehicle (`np_sim.vehic
 κ_max, the validators' footprint; a learned planner's checkpoint must have been trained for it); the frozen starts
 were drawn for the default car, so each record says whether the vehicle's footprint at its start is free
 (``start_footprint_free``) and the table counts those that are not. Writes ``records.csv``/``records.json`` (one
-row per episode and method), ``table.md`` and ``config.json`` into the run folder.
+row per episode and method), ``table.md`` and ``config.json`` into the run folder. Each finished episode is kept
+in the folder as the run goes (`experiments.progress`): after a kill, ``--resume`` with the same arguments and
+``--out`` plans only the episodes that were not finished, and the records equal an uninterrupted run's.
 
 ``--scenes FILE...`` plans your own scene files instead (`experiments.scene_files`): each file's explicit starts,
 or ``--starts N`` drawn from its start region with ``--seed S``; records add the file and the start pose, and
@@ -36,11 +38,12 @@ import numpy as np
 from tqdm import tqdm
 
 from experiments.common import first, git_state, run_folder, write_records
+from experiments.progress import EpisodeProgress, holds_progress
 from experiments.registry import PlannerOptions, build_planners, check_names, label
 from experiments.scene_files import (add_scene_arguments, describe, episode_scenes, load_scene_files, scene_columns,
                                      starts_summary, strictest)
 from hope_policy.config import HOPE_ACTIONS
-from np_sim.cli import cli_boundary, fresh_folder, non_negative_int, positive_int, vehicle_spec
+from np_sim.cli import cli_boundary, folder_problem, non_negative_int, positive_int, vehicle_spec
 from np_sim.collision import path_valid
 from np_sim.planners import HybridAStar
 from np_sim.validate import plan_valid, scoring_rule
@@ -58,10 +61,11 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
         convention: str = "reference_point", out: Path | None = None, limit: int | None = None, ompl_seed: int = 0,
         progress: bool = True, hope_checkpoint: Path | None = None, hope_action: str = "sampled", hope_seed: int = 0,
         vehicle: VehicleSpec | None = None, scenes: list[Path] | None = None, n_starts: int | None = None,
-        seed: int = 0) -> dict[str, Any]:
+        seed: int = 0, resume: bool = False) -> dict[str, Any]:
     """Plan every frozen start with every method for ``vehicle`` (default the sedan); returns the records, the
     table text and the run folder. With ``scenes`` (files), their starts instead (`experiments.scene_files`:
-    the files' own, or ``n_starts`` drawn with ``seed``)."""
+    the files' own, or ``n_starts`` drawn with ``seed``). Each finished episode is kept in the folder as it goes
+    (`experiments.progress`); ``resume`` continues the interrupted run in ``out``."""
     methods = check_names(DEFAULT_METHODS if methods is None else methods, METHODS)
     vehicle = VehicleSpec() if vehicle is None else vehicle
     options = PlannerOptions(checkpoint=checkpoint, convention=convention, ompl_seed=ompl_seed,
@@ -72,39 +76,52 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
              if scenes else None)
     scenes, starts = episode_scenes(benchmark, files)
     episodes = first([(k, j) for k in range(len(scenes)) for j in range(len(starts[k]))], limit)
-    folder = run_folder("planners", out)
+    settings = {"benchmark": None if files else benchmark, "scenes": describe(files), "starts_seed": seed,
+                "methods": methods, "checkpoint": None if checkpoint is None else str(checkpoint),
+                "convention": convention, "vehicle": vehicle.to_dict(), "episodes": len(episodes),
+                "ompl_seed": ompl_seed, "neuralparker": options.neuralparker.to_dict(),
+                "hope": {"checkpoint": None if hope_checkpoint is None else str(hope_checkpoint),
+                         "action": hope_action, "seed": hope_seed}}
+    folder = out if resume and out is not None and holds_progress(out) else run_folder("planners", out)
+    kept = EpisodeProgress(folder, settings, resume)
     records: list[dict[str, Any]] = []
     for k, j in tqdm(episodes, desc=f"planners/{'scenes' if files else benchmark}", unit="ep", disable=not progress):
-        free = int(path_valid(scenes[k], starts[k][j][None], "footprint", vehicle))
-        for method in methods:
-            plan = planners[method].plan(scenes[k], starts[k][j])
-            L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))
-            scored = planners[method].convention
-            records.append({"scene": scenes[k].name, "start_id": j, **scene_columns(files, k, j), "method": method,
-                            "seed": ompl_seed,
-                            "convention": scored, "success": int(plan.success), "reason": plan.reason, "L": L,
-                            "reversals": rev, "delta_kappa": dk, "plan_time_ms": 1e3 * plan.plan_time_s,
-                            "expanded_nodes": plan.expanded_nodes,
-                            "guide_time_ms": 1e3 * getattr(plan, "guide_time_s", float("nan")),
-                            "start_footprint_free": free,
-                            "scored_valid": int(plan_valid(scenes[k], plan, scoring_rule(scored), vehicle=vehicle)),
-                            "exact_footprint_valid": int(plan_valid(scenes[k], plan, "exact", "footprint", vehicle)),
-                            "exact_ref_point_valid": int(plan_valid(scenes[k], plan, "exact", "reference_point",
-                                                                    vehicle))})
+        rows = kept.done.get((k, j))
+        if rows is None:
+            rows = episode_rows(planners, scenes[k], starts[k][j], vehicle, ompl_seed,
+                                {"scene": scenes[k].name, "start_id": j, **scene_columns(files, k, j)})
+            kept.add((k, j), rows)
+        records += rows
     table = format_table(records, methods)
     write_records(folder, records)
     (folder / "table.md").write_text(table + "\n")
     (folder / "config.json").write_text(json.dumps({
-        "benchmark": None if files else benchmark, "scenes": describe(files), "starts_seed": seed,
-        "methods": methods, "checkpoint": None if checkpoint is None else str(checkpoint),
-        "convention": convention, "vehicle": vehicle.to_dict(), "episodes": len(episodes), "ompl_seed": ompl_seed,
-        "neuralparker": options.neuralparker.to_dict(),
-        "hope": {"checkpoint": None if hope_checkpoint is None else str(hope_checkpoint), "action": hope_action,
-                 "seed": hope_seed},
-        "hybrid_astar": {k: v for k, v in vars(planners.get("hybrid_astar", HybridAStar()).config).items()
-                         if k != "vehicle"},
+        **settings, "hybrid_astar": {k: v for k, v in vars(planners.get("hybrid_astar", HybridAStar()).config).items()
+                                     if k != "vehicle"},
         **git_state()}, indent=2, default=str))
+    kept.finish()
     return {"records": records, "table": table, "folder": folder, "starts": starts_summary(files)}
+
+
+def episode_rows(planners: dict[str, Any], scene, start, vehicle: VehicleSpec, ompl_seed: int,
+                 episode: dict[str, Any]) -> list[dict[str, Any]]:
+    """One record row per method for the start ``start`` of ``scene`` (``episode``: the columns naming it)."""
+    free = int(path_valid(scene, start[None], "footprint", vehicle))
+    rows = []
+    for method, planner in planners.items():
+        plan = planner.plan(scene, start)
+        L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))
+        scored = planner.convention
+        rows.append({**episode, "method": method, "seed": ompl_seed,
+                     "convention": scored, "success": int(plan.success), "reason": plan.reason, "L": L,
+                     "reversals": rev, "delta_kappa": dk, "plan_time_ms": 1e3 * plan.plan_time_s,
+                     "expanded_nodes": plan.expanded_nodes,
+                     "guide_time_ms": 1e3 * getattr(plan, "guide_time_s", float("nan")),
+                     "start_footprint_free": free,
+                     "scored_valid": int(plan_valid(scene, plan, scoring_rule(scored), vehicle=vehicle)),
+                     "exact_footprint_valid": int(plan_valid(scene, plan, "exact", "footprint", vehicle)),
+                     "exact_ref_point_valid": int(plan_valid(scene, plan, "exact", "reference_point", vehicle))})
+    return rows
 
 
 def format_table(records: list[dict[str, Any]], methods: list[str]) -> str:
@@ -146,6 +163,18 @@ def format_table(records: list[dict[str, Any]], methods: list[str]) -> str:
     return "\n".join(lines)
 
 
+def check_out(parser: argparse.ArgumentParser, out: Path | None, resume: bool) -> None:
+    """``--out`` must be a new or empty folder, or with ``--resume`` one that holds an interrupted run (the usage
+    error of argparse otherwise)."""
+    if out is None:
+        if resume:
+            parser.error("argument --resume: needs --out, the folder of the interrupted run")
+        return
+    problem = folder_problem(out)
+    if problem is not None and not (resume and out.is_dir() and holds_progress(out)):
+        parser.error(f"argument --out: {problem}" + (" (and it holds no interrupted run to resume)" if resume else ""))
+
+
 @cli_boundary
 def main(argv=None) -> dict[str, Any]:
     """Command-line entry point (usage in the module docstring; ``--help`` lists the options; a user's mistake
@@ -172,15 +201,19 @@ def main(argv=None) -> dict[str, Any]:
                         help="vehicle planned for: a preset (sedan, the default; van) or a vehicle JSON file "
                              "(docs/vehicles.md)")
     parser.add_argument("--ompl-seed", type=non_negative_int, default=0, help="OMPL's random seed")
-    parser.add_argument("--out", type=fresh_folder,
+    parser.add_argument("--out", type=Path,
                         help="new or empty run folder (default: a fresh results/planners/<timestamp>)")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue the interrupted run in --out where it stopped (the same other arguments; a "
+                             "new or empty --out starts a fresh run)")
     parser.add_argument("--limit", type=positive_int, help="only the first N frozen episodes (smoke runs)")
     add_scene_arguments(parser)
     args = parser.parse_args(argv)
+    check_out(parser, args.out, args.resume)
     result = run(args.benchmark, args.methods, args.checkpoint, args.convention, args.out, args.limit, args.ompl_seed,
                  hope_checkpoint=args.hope_checkpoint, hope_action=args.hope_action, hope_seed=args.hope_seed,
                  vehicle=args.vehicle, scenes=args.scenes,
-                 n_starts=args.starts, seed=args.seed)
+                 n_starts=args.starts, seed=args.seed, resume=args.resume)
     if result["starts"]:
         print(result["starts"])
     print(result["table"])

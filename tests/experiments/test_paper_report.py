@@ -164,6 +164,16 @@ def test_a_finished_adapted_hope_run_is_read_from_final_pt_and_its_planner_recor
     assert sorted(measured.records) == [0] and measured.seeds_text().startswith("1 of 3 (seed 0; seed 1: not trained")
     staged_arm = Arm("Hybrid A* → HOPE", "factorial_hope", "staged")
     assert measure(staged_arm, runs, 1, False, {}).missing[0] == "trained, not evaluated yet"
+    killed = seed0 / "eval_factorial_staged"  # an experiments.planners run killed mid-way: resumed, not refused
+    killed.mkdir()
+    (killed / "progress_settings.json").write_text("{}")
+    assert measure(staged_arm, runs, 1, False, {}).missing[0] == "trained, evaluation interrupted"
+    (killed / "progress_settings.json").unlink()
+    (killed / "table.md").write_text("| a |")
+    assert measure(staged_arm, runs, 1, False, {}).missing[0].endswith("holds an interrupted evaluation (remove it "
+                                                                      "to re-run)")
+    (killed / "table.md").unlink()
+    killed.rmdir()
     argv = evaluation_argv(staged_arm, runs[("factorial_hope", 0)], seed0 / "eval_factorial_staged")
     assert argv[argv.index("--methods") + 1] == "staged_astar_hope" and "--hope-checkpoint" in argv
     assert measure(Arm("Ensemble", "factorial_hope", "ensemble"), runs, 1, False, {}).missing[0].endswith(

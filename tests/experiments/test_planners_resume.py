@@ -1,0 +1,79 @@
+"""experiments.planners keeps each finished episode (experiments.progress): a killed run resumes where it stopped
+and writes the records an uninterrupted run writes; a resume with other settings, or without an interrupted run to
+resume, is refused."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from experiments import planners
+from experiments.planners import DEFAULT_CHECKPOINT, main
+from experiments.progress import PROGRESS_FILE, SETTINGS_FILE
+from np_sim.errors import ConfigError
+
+pytestmark = pytest.mark.skipif(not DEFAULT_CHECKPOINT.exists(), reason="no shipped NeuralParker checkpoint")
+TIMED = ("plan_time_ms", "guide_time_ms")
+
+
+def _untimed(records):
+    return [{k: v for k, v in r.items() if k not in TIMED} for r in records]
+
+
+def _run(out, **kwargs):
+    return planners.run("factorial", ["neuralparker", "hybrid_astar"], out=out, limit=5, progress=False, **kwargs)
+
+
+def test_a_killed_run_resumes_and_writes_the_uninterrupted_records(tmp_path, monkeypatch):
+    straight = _run(tmp_path / "straight")
+    real, calls = planners.episode_rows, []
+
+    def killed_at_the_fourth_episode(*args):
+        calls.append(args)
+        if len(calls) == 4:
+            raise KeyboardInterrupt
+        return real(*args)
+
+    monkeypatch.setattr(planners, "episode_rows", killed_at_the_fourth_episode)
+    with pytest.raises(KeyboardInterrupt):
+        _run(tmp_path / "killed")
+    progress = tmp_path / "killed" / PROGRESS_FILE
+    assert len(progress.read_text().splitlines()) == 3 and not (tmp_path / "killed" / "records.csv").exists()
+    progress.write_text(progress.read_text() + '{"episode": [0, 3], "rows": [{"scene')  # torn by the kill
+    monkeypatch.setattr(planners, "episode_rows", lambda *args: calls.append(args) or real(*args))
+    calls.clear()
+    resumed = _run(tmp_path / "killed", resume=True)
+    assert len(calls) == 2  # episodes 4 and 5 only (the torn one is planned again)
+    assert _untimed(resumed["records"]) == _untimed(straight["records"])
+    assert (tmp_path / "killed" / "records.csv").read_text().count("\n") == 11
+    assert not (tmp_path / "killed" / PROGRESS_FILE).exists() and not (tmp_path / "killed" / SETTINGS_FILE).exists()
+    config = json.loads((tmp_path / "killed" / "config.json").read_text())
+    assert config["episodes"] == 5 and config["methods"] == ["neuralparker", "hybrid_astar"]
+
+
+def test_a_resume_with_other_settings_names_them_and_changes_nothing(tmp_path, monkeypatch):
+    monkeypatch.setattr(planners, "episode_rows", lambda *args: (_ for _ in ()).throw(KeyboardInterrupt))
+    with pytest.raises(KeyboardInterrupt):
+        _run(tmp_path / "run")
+    before = {p.name: p.read_bytes() for p in (tmp_path / "run").iterdir()}
+    with pytest.raises(ConfigError, match=r"started with other settings: ompl_seed: 0, now 7"):
+        _run(tmp_path / "run", resume=True, ompl_seed=7)
+    assert {p.name: p.read_bytes() for p in (tmp_path / "run").iterdir()} == before
+
+
+@pytest.mark.parametrize("make, argv, message", [
+    (False, ["--resume"], "argument --resume: needs --out, the folder of the interrupted run"),
+    (True, ["--resume", "--out", "{finished}"], "exists and is not empty (an earlier run's results are kept); give a "
+                                                "new or empty folder, or omit --out for a fresh timestamped one (and "
+                                                "it holds no interrupted run to resume)"),
+])
+def test_resume_needs_an_interrupted_run_in_out(tmp_path, capsys, make, argv, message):
+    finished = tmp_path / "finished"
+    if make:
+        finished.mkdir()
+        (finished / "records.csv").write_text("scene\n")
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--methods", "hybrid_astar", "--limit", "1", *(a.format(finished=finished) for a in argv)])
+    assert exit_info.value.code == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1].endswith(message)
