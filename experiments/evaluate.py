@@ -2,7 +2,7 @@
 
 ``python -m experiments.evaluate --benchmark factorial --checkpoints a.pt [b.pt c.pt] [--preset paper]
 [--connector fixed|ensemble|centred] [--samples N | --action sample [--action-seed S]] [--vehicle sedan|van|FILE]
-[--out DIR]``
+[--out DIR [--resume]]``
 
 Each checkpoint is one training seed. Every frozen start (1,080 Factorial, 720 Topology-Stress) is planned with
 the checkpoint's environment rules and the NeuralParker preset ``--preset`` (`np_policy.config.PRESETS`; default
@@ -18,7 +18,8 @@ on the common-success cohort — here the episodes every
 evaluated seed solved — reported as the mean ± sample SD over seeds; plan time as median and 90th percentile.
 ``--vehicle`` (`np_sim.vehicle`, default the sedan) is the vehicle planned for: a checkpoint trained for another
 one is refused with both named, and the exact footprint validity uses its footprint. Writes ``records.csv`` and
-``records.json`` (one row per episode), ``table.md`` and ``config.json`` into the run folder.
+``records.json`` (one row per episode), ``table.md`` and ``config.json`` into the run folder; each finished
+episode is kept as the run goes, and ``--resume`` continues a killed run (`experiments.progress`).
 """
 
 from __future__ import annotations
@@ -32,11 +33,12 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import first, git_state, mean_sd, run_folder, write_records
+from experiments.common import first, git_state, mean_sd, write_records
+from experiments.progress import EpisodeProgress, check_out, progress_folder
 from np_policy.config import ACTIONS, PAPER, PRESETS, NeuralParkerConfig
 from np_policy.planner import NeuralParkerPlanner
 from np_sim.benchmarks import frozen_starts, load_benchmark
-from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int, vehicle_spec
+from np_sim.cli import cli_boundary, existing_file, non_negative_int, positive_int, vehicle_spec
 from np_sim.config import CONNECTOR_VARIANTS
 from np_sim.validate import plan_valid
 from np_sim.vehicle import VehicleSpec
@@ -52,39 +54,52 @@ def method_name(config: NeuralParkerConfig) -> str:
 
 
 def evaluate(benchmark: str, checkpoints: list[Path], config: NeuralParkerConfig = PAPER, out: Path | None = None,
-             limit: int | None = None, progress: bool = True, vehicle: VehicleSpec | None = None) -> dict[str, Any]:
+             limit: int | None = None, progress: bool = True, vehicle: VehicleSpec | None = None,
+             resume: bool = False) -> dict[str, Any]:
     """Plan every frozen start with every checkpoint for ``vehicle`` (default the sedan; a checkpoint trained for
     another is refused), playing each as ``config`` says (the 'paper' preset: the mean action); returns the records
-    and the table text."""
+    and the table text. Each finished episode is kept as it goes (`experiments.progress`); ``resume`` continues the
+    interrupted run in ``out``."""
     vehicle = VehicleSpec() if vehicle is None else vehicle
     scenes = load_benchmark(benchmark, "test")
     starts = frozen_starts(benchmark)
     episodes = first([(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])], limit)
-    folder = run_folder("evaluate", out)
+    settings = {"benchmark": benchmark, "checkpoints": [str(p) for p in checkpoints],
+                "neuralparker": config.to_dict(), "vehicle": vehicle.to_dict(), "episodes": len(episodes)}
+    folder = progress_folder("evaluate", out, resume)
+    kept = EpisodeProgress(folder, settings, resume)
     records: list[dict[str, Any]] = []
-    method = method_name(config)
     for seed_index, path in enumerate(checkpoints):
         planner = NeuralParkerPlanner.from_checkpoint(path, config, benchmark=benchmark, vehicle=vehicle)
         for k, j in tqdm(episodes, desc=f"{Path(path).name}", unit="ep", disable=not progress):
-            plan = planner.plan(scenes[k], starts[k, j])
-            L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))
-            records.append({"scene": scenes[k].name, "start_id": j, "method": method,
-                            "connector": config.connector or planner.env_config.connector.mode,
-                            "checkpoint": str(path), "seed": planner.policy.train.seed, "seed_index": seed_index,
-                            "success": int(plan.success), "reason": plan.reason, "L": L, "reversals": rev,
-                            "delta_kappa": dk, "plan_time_ms": 1e3 * plan.plan_time_s,
-                            "exact_footprint_valid": int(plan_valid(scenes[k], plan, "exact", "footprint", vehicle)),
-                            "exact_ref_point_valid": int(plan_valid(scenes[k], plan, "exact", "reference_point",
-                                                                    vehicle))})
+            rows = kept.done.get((seed_index, k, j))
+            if rows is None:
+                rows = [episode_row(planner, config, scenes[k], starts[k, j], vehicle,
+                                    {"scene": scenes[k].name, "start_id": j, "checkpoint": str(path),
+                                     "seed_index": seed_index})]
+                kept.add((seed_index, k, j), rows)
+            records += rows
     table = format_table(records, len(checkpoints))
     write_records(folder, records)
     (folder / "table.md").write_text(table + "\n")
-    (folder / "config.json").write_text(json.dumps({"benchmark": benchmark,
-                                                    "checkpoints": [str(p) for p in checkpoints],
-                                                    "neuralparker": config.to_dict(), "vehicle": vehicle.to_dict(),
-                                                    "episodes": len(episodes),
-                                                    **git_state()}, indent=2))
+    (folder / "config.json").write_text(json.dumps({**settings, **git_state()}, indent=2))
+    kept.finish()
     return {"records": records, "table": table, "folder": folder}
+
+
+def episode_row(planner: NeuralParkerPlanner, config: NeuralParkerConfig, scene, start, vehicle: VehicleSpec,
+                episode: dict[str, Any]) -> dict[str, Any]:
+    """The record of one frozen start planned by ``planner`` (``episode``: the columns naming it)."""
+    plan = planner.plan(scene, start)
+    L, rev, dk = plan.metrics() if plan.success else (float("nan"), -1, float("nan"))
+    return {"scene": episode["scene"], "start_id": episode["start_id"], "method": method_name(config),
+            "connector": config.connector or planner.env_config.connector.mode,
+            "checkpoint": episode["checkpoint"], "seed": planner.policy.train.seed,
+            "seed_index": episode["seed_index"],
+            "success": int(plan.success), "reason": plan.reason, "L": L, "reversals": rev,
+            "delta_kappa": dk, "plan_time_ms": 1e3 * plan.plan_time_s,
+            "exact_footprint_valid": int(plan_valid(scene, plan, "exact", "footprint", vehicle)),
+            "exact_ref_point_valid": int(plan_valid(scene, plan, "exact", "reference_point", vehicle))}
 
 
 def format_table(records: list[dict[str, Any]], n_seeds: int) -> str:
@@ -132,13 +147,18 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--vehicle", type=vehicle_spec, default=VehicleSpec(),
                         help="vehicle planned for: a preset (sedan, the default; van) or a vehicle JSON file "
                              "(docs/vehicles.md); the checkpoints must have been trained for it")
-    parser.add_argument("--out", type=fresh_folder,
+    parser.add_argument("--out", type=Path,
                         help="new or empty run folder (default: a fresh results/evaluate/<timestamp>)")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue the interrupted run in --out where it stopped (the same other arguments; a "
+                             "new or empty --out starts a fresh run)")
     parser.add_argument("--limit", type=positive_int, help="only the first N frozen episodes (smoke runs)")
     args = parser.parse_args(argv)
+    check_out(parser, args.out, args.resume)
     fields = {"connector": args.connector, "samples": args.samples, "action": args.action, "seed": args.action_seed}
     config = dataclasses.replace(PRESETS[args.preset], **{k: v for k, v in fields.items() if v is not None})
-    result = evaluate(args.benchmark, args.checkpoints, config, args.out, args.limit, vehicle=args.vehicle)
+    result = evaluate(args.benchmark, args.checkpoints, config, args.out, args.limit, vehicle=args.vehicle,
+                      resume=args.resume)
     print(result["table"])
     print(f"records: {result['folder'] / 'records.csv'}")
     return result

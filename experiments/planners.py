@@ -37,13 +37,13 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import first, git_state, run_folder, write_records
-from experiments.progress import EpisodeProgress, holds_progress
+from experiments.common import first, git_state, write_records
+from experiments.progress import EpisodeProgress, check_out, progress_folder
 from experiments.registry import PlannerOptions, build_planners, check_names, label
 from experiments.scene_files import (add_scene_arguments, describe, episode_scenes, load_scene_files, scene_columns,
                                      starts_summary, strictest)
 from hope_policy.config import HOPE_ACTIONS
-from np_sim.cli import cli_boundary, folder_problem, non_negative_int, positive_int, vehicle_spec
+from np_sim.cli import cli_boundary, non_negative_int, positive_int, vehicle_spec
 from np_sim.collision import path_valid
 from np_sim.planners import HybridAStar
 from np_sim.validate import plan_valid, scoring_rule
@@ -82,7 +82,7 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
                 "ompl_seed": ompl_seed, "neuralparker": options.neuralparker.to_dict(),
                 "hope": {"checkpoint": None if hope_checkpoint is None else str(hope_checkpoint),
                          "action": hope_action, "seed": hope_seed}}
-    folder = out if resume and out is not None and holds_progress(out) else run_folder("planners", out)
+    folder = progress_folder("planners", out, resume)
     kept = EpisodeProgress(folder, settings, resume)
     records: list[dict[str, Any]] = []
     for k, j in tqdm(episodes, desc=f"planners/{'scenes' if files else benchmark}", unit="ep", disable=not progress):
@@ -161,18 +161,6 @@ def format_table(records: list[dict[str, Any]], methods: list[str]) -> str:
                       f"{search / hybrid:.2f} search only (rollout median "
                       f"{np.median([r['guide_time_ms'] for r in guided]):.2f} ms)."]
     return "\n".join(lines)
-
-
-def check_out(parser: argparse.ArgumentParser, out: Path | None, resume: bool) -> None:
-    """``--out`` must be a new or empty folder, or with ``--resume`` one that holds an interrupted run (the usage
-    error of argparse otherwise)."""
-    if out is None:
-        if resume:
-            parser.error("argument --resume: needs --out, the folder of the interrupted run")
-        return
-    problem = folder_problem(out)
-    if problem is not None and not (resume and out.is_dir() and holds_progress(out)):
-        parser.error(f"argument --out: {problem}" + (" (and it holds no interrupted run to resume)" if resume else ""))
 
 
 @cli_boundary

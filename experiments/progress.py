@@ -12,10 +12,13 @@ removed.
 
 from __future__ import annotations
 
+import argparse
 import json
 from pathlib import Path
 from typing import Any
 
+from experiments.common import run_folder
+from np_sim.cli import folder_problem
 from np_sim.errors import ConfigError
 
 PROGRESS_FILE = "progress.jsonl"
@@ -25,6 +28,25 @@ SETTINGS_FILE = "progress_settings.json"
 def holds_progress(folder: Path) -> bool:
     """Whether ``folder`` holds an interrupted run's progress (it can be resumed)."""
     return (Path(folder) / SETTINGS_FILE).exists()
+
+
+def check_out(parser: argparse.ArgumentParser, out: Path | None, resume: bool) -> None:
+    """A CLI's ``--out`` must be a new or empty folder, or with ``--resume`` one that holds an interrupted run
+    (argparse's usage error otherwise)."""
+    if out is None:
+        if resume:
+            parser.error("argument --resume: needs --out, the folder of the interrupted run")
+        return
+    problem = folder_problem(out)
+    if problem is not None and not (resume and out.is_dir() and holds_progress(out)):
+        parser.error(f"argument --out: {problem}" + (" (and it holds no interrupted run to resume)" if resume else ""))
+
+
+def progress_folder(experiment: str, out: Path | None, resume: bool) -> Path:
+    """The run folder: ``out`` when resuming the interrupted run it holds, else a fresh one (`run_folder`)."""
+    if resume and out is not None and holds_progress(out):
+        return Path(out)
+    return run_folder(experiment, out)
 
 
 class EpisodeProgress:

@@ -1,6 +1,6 @@
-"""experiments.planners keeps each finished episode (experiments.progress): a killed run resumes where it stopped
-and writes the records an uninterrupted run writes; a resume with other settings, or without an interrupted run to
-resume, is refused."""
+"""experiments.planners and experiments.evaluate keep each finished episode (experiments.progress): a killed run
+resumes where it stopped and writes the records an uninterrupted run writes; a resume with other settings, or
+without an interrupted run to resume, is refused."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import json
 
 import pytest
 
-from experiments import planners
+from experiments import evaluate, planners
 from experiments.planners import DEFAULT_CHECKPOINT, main
 from experiments.progress import PROGRESS_FILE, SETTINGS_FILE
 from np_sim.errors import ConfigError
@@ -21,21 +21,28 @@ def _untimed(records):
     return [{k: v for k, v in r.items() if k not in TIMED} for r in records]
 
 
+def _killed_at(monkeypatch, module, name, episode):
+    """Make ``module.name`` (one episode's planning) raise KeyboardInterrupt at its ``episode``-th call, a kill in
+    the middle of a run; returns the real function and the list of calls."""
+    real, calls = getattr(module, name), []
+
+    def planned(*args):
+        calls.append(args)
+        if len(calls) == episode:
+            raise KeyboardInterrupt
+        return real(*args)
+
+    monkeypatch.setattr(module, name, planned)
+    return real, calls
+
+
 def _run(out, **kwargs):
     return planners.run("factorial", ["neuralparker", "hybrid_astar"], out=out, limit=5, progress=False, **kwargs)
 
 
 def test_a_killed_run_resumes_and_writes_the_uninterrupted_records(tmp_path, monkeypatch):
     straight = _run(tmp_path / "straight")
-    real, calls = planners.episode_rows, []
-
-    def killed_at_the_fourth_episode(*args):
-        calls.append(args)
-        if len(calls) == 4:
-            raise KeyboardInterrupt
-        return real(*args)
-
-    monkeypatch.setattr(planners, "episode_rows", killed_at_the_fourth_episode)
+    real, calls = _killed_at(monkeypatch, planners, "episode_rows", 4)
     with pytest.raises(KeyboardInterrupt):
         _run(tmp_path / "killed")
     progress = tmp_path / "killed" / PROGRESS_FILE
@@ -77,3 +84,19 @@ def test_resume_needs_an_interrupted_run_in_out(tmp_path, capsys, make, argv, me
         main(["--methods", "hybrid_astar", "--limit", "1", *(a.format(finished=finished) for a in argv)])
     assert exit_info.value.code == 2
     assert capsys.readouterr().err.strip().splitlines()[-1].endswith(message)
+
+
+def test_a_killed_evaluation_resumes_and_writes_the_uninterrupted_records(tmp_path, monkeypatch):
+    def run(out, **kwargs):
+        return evaluate.evaluate("factorial", [DEFAULT_CHECKPOINT], out=out, limit=4, progress=False, **kwargs)
+
+    straight = run(tmp_path / "straight")
+    real, calls = _killed_at(monkeypatch, evaluate, "episode_row", 3)
+    with pytest.raises(KeyboardInterrupt):
+        run(tmp_path / "killed")
+    monkeypatch.setattr(evaluate, "episode_row", lambda *args: calls.append(args) or real(*args))
+    calls.clear()
+    resumed = run(tmp_path / "killed", resume=True)
+    assert len(calls) == 2 and _untimed(resumed["records"]) == _untimed(straight["records"])
+    assert evaluate.main(["--checkpoints", str(DEFAULT_CHECKPOINT), "--limit", "1", "--out", str(tmp_path / "cli"),
+                          "--resume"])["records"]  # --resume on a new folder is a fresh run
