@@ -5,8 +5,9 @@ of it to a kill: its records were written at the end only. `EpisodeProgress` app
 record rows to ``progress.jsonl`` in the run folder (one JSON line per episode, flushed) beside
 ``progress_settings.json``, the settings the run was started with. Resuming reads both: the settings must be the
 same (a ConfigError names the ones that differ), the episodes already there are not planned again, and a torn last
-line (a kill in the middle of a write) is dropped. Every random choice of the evaluated planners is seeded per
-episode, so the resumed records equal an uninterrupted run's. Once the run writes its records the two files are
+line (a kill in the middle of a write) is dropped. NeuralParker and the adapted HOPE seed every random choice per
+episode, so their resumed records equal an uninterrupted run's (searches with a wall-time budget, and OMPL's
+generator seeded once per run, are as repeatable as a fresh run). Once the run writes its records the two files are
 removed.
 """
 
