@@ -37,7 +37,8 @@ def _killed_at(monkeypatch, module, name, episode):
 
 
 def _run(out, **kwargs):
-    return planners.run("factorial", ["neuralparker", "hybrid_astar"], out=out, limit=5, progress=False, **kwargs)
+    # NeuralParker only: its records repeat exactly; a search's stop at its wall-time budget could differ under load
+    return planners.run("factorial", ["neuralparker"], out=out, limit=5, progress=False, **kwargs)
 
 
 def test_a_killed_run_resumes_and_writes_the_uninterrupted_records(tmp_path, monkeypatch):
@@ -53,10 +54,10 @@ def test_a_killed_run_resumes_and_writes_the_uninterrupted_records(tmp_path, mon
     resumed = _run(tmp_path / "killed", resume=True)
     assert len(calls) == 2  # episodes 4 and 5 only (the torn one is planned again)
     assert _untimed(resumed["records"]) == _untimed(straight["records"])
-    assert (tmp_path / "killed" / "records.csv").read_text().count("\n") == 11
+    assert (tmp_path / "killed" / "records.csv").read_text().count("\n") == 6
     assert not (tmp_path / "killed" / PROGRESS_FILE).exists() and not (tmp_path / "killed" / SETTINGS_FILE).exists()
     config = json.loads((tmp_path / "killed" / "config.json").read_text())
-    assert config["episodes"] == 5 and config["methods"] == ["neuralparker", "hybrid_astar"]
+    assert config["episodes"] == 5 and config["methods"] == ["neuralparker"]
 
 
 def test_a_resume_with_other_settings_names_them_and_changes_nothing(tmp_path, monkeypatch):
