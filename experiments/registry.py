@@ -17,6 +17,7 @@ adds one field to `PlannerOptions`.
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,6 +50,10 @@ class PlannerOptions:
     """Collision convention of the searches (Hybrid A*, NP-Guided A*, the staged prefix, OMPL RRT*)."""
     search_margin_m: float = 0.0
     """Hybrid A* and NP-Guided A*'s search plan for the footprint grown by this on every side (m)."""
+    search_time_budget_s: float = 1.0
+    """Wall-time budget of one search query (s; `HybridAStarConfig.time_budget_s`, also OMPL RRT*'s). A query stops
+    at this or at its node budget, whichever comes first: give a budget it never reaches (e.g. 1000) for search
+    results that do not depend on the machine's speed or load."""
     ompl_seed: int = 0
     """OMPL's random seed."""
     hope_checkpoint: Path | None = None
@@ -71,6 +76,9 @@ class PlannerOptions:
             raise ConfigError(f"PlannerOptions.convention: expected one of {CONVENTIONS}, got {self.convention!r}")
         if not self.search_margin_m >= 0:
             raise ConfigError(f"PlannerOptions.search_margin_m: expected >= 0 m, got {self.search_margin_m!r}")
+        if not (isinstance(self.search_time_budget_s, (int, float)) and 0 < self.search_time_budget_s < math.inf):
+            raise ConfigError(f"PlannerOptions.search_time_budget_s: expected a finite number of seconds > 0, got "
+                              f"{self.search_time_budget_s!r}")
 
 
 Factory = Callable[[PlannerOptions, PolicyLoader], Planner]
@@ -100,7 +108,8 @@ def required_checkpoint(path: Path | None, name: str, how: str = "--checkpoint P
 def _search(options: PlannerOptions):
     from np_sim.planners import HybridAStar, HybridAStarConfig
 
-    config = HybridAStarConfig(vehicle=options.vehicle.inflated(options.search_margin_m))
+    config = HybridAStarConfig(vehicle=options.vehicle.inflated(options.search_margin_m),
+                               time_budget_s=options.search_time_budget_s)
     return HybridAStar(config, convention=options.convention)
 
 

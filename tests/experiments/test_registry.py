@@ -78,3 +78,15 @@ def test_unknown_names_and_missing_checkpoints_are_named(tmp_path):
         build_planners(["neuralparker"], PlannerOptions(checkpoint=tmp_path / "none.pt"))
     with pytest.raises(ConfigError, match="PlannerOptions.convention: expected one of"):
         PlannerOptions(convention="centre")
+
+
+def test_the_search_time_budget_reaches_every_search_and_a_bad_one_is_named():
+    options = PlannerOptions(checkpoint=CHECKPOINT, search_time_budget_s=1000.0)
+    built = build_planners(["hybrid_astar", "np_guided_astar", "staged_astar_np", "ompl_rrtstar"], options)
+    budgets = [built["hybrid_astar"].config, built["np_guided_astar"].search.config,
+               built["staged_astar_np"].search.config, built["ompl_rrtstar"].config]
+    assert [c.time_budget_s for c in budgets] == [1000.0] * 4
+    assert PlannerOptions().search_time_budget_s == 1.0  # the default: HybridAStarConfig's own
+    for bad in (0.0, -1.0, float("inf"), float("nan"), "1"):
+        with pytest.raises(ConfigError, match="PlannerOptions.search_time_budget_s: expected a finite number"):
+            PlannerOptions(search_time_budget_s=bad)
