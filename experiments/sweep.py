@@ -62,7 +62,7 @@ def _kill_with_parent() -> None:
 def run_environment(cpus: float) -> dict[str, str]:
     """The trainer subprocess's environment: this process's, with torch's and numba's thread counts
     (``OMP_NUM_THREADS``, ``NUMBA_NUM_THREADS``) set to the run's CPUs. Ray sets only the first; numba would start
-    a thread per core and raise torch's count with it (`np_policy.train.use_threads`), so runs sharing a machine
+    a thread per core and raise torch's count with it (`np_policy.threads.use_threads`), so runs sharing a machine
     would each spin on every core."""
     threads = str(max(1, int(cpus)))
     return {**os.environ, "OMP_NUM_THREADS": threads, "NUMBA_NUM_THREADS": threads}

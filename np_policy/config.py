@@ -252,7 +252,7 @@ class TrainConfig:
     seed: int = 0
     """Seed of torch, the envs' starts and the minibatch shuffling."""
     torch_threads: int = 0
-    """Threads of torch and of numba's parallel env loops (`np_policy.train.use_threads`; 0 = all cores)."""
+    """Threads of torch and of numba's parallel env loops (`np_policy.threads.use_threads`; 0 = all cores)."""
     curriculum_pool: int = 256
     """Start poses per scene in the geodesic curriculum pool."""
     curriculum_region: str = "start_region"

@@ -15,9 +15,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-import torch
-
 from np_policy.bev_encoder import PRETRAIN_BENCHMARKS, PretrainConfig, pretrain
+from np_policy.threads import use_threads
 from np_sim.cli import cli_boundary, non_negative_int, positive_int
 
 DEFAULT_FOLDER = Path("checkpoints/bev")
@@ -37,10 +36,11 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     parser.add_argument("--epochs", type=positive_int, default=PretrainConfig.epochs, help="training epochs")
     parser.add_argument("--seed", type=non_negative_int, default=0,
                         help="seed of rollouts, split and training (default 0)")
-    parser.add_argument("--threads", type=positive_int, help="torch threads (default: torch's choice)")
+    parser.add_argument("--threads", type=positive_int,
+                        help="threads of torch and of the rollouts' numba loops (default: every core)")
     args = parser.parse_args(argv)
     if args.threads:
-        torch.set_num_threads(args.threads)
+        use_threads(args.threads)
     config = PretrainConfig(benchmark=args.benchmark, images=args.images, epochs=args.epochs, seed=args.seed)
     out = args.out or DEFAULT_FOLDER / f"{args.benchmark}_ae.pt"
     out.parent.mkdir(parents=True, exist_ok=True)

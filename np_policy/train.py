@@ -41,6 +41,7 @@ from np_policy.config import (BENCHMARKS, PPOConfig, TrainConfig, benchmark_defa
                               checkpoint_config, is_scene_path)
 from np_policy.network import ActorCritic, clip_action
 from np_policy.ppo import RunningMeanStd, compute_targets, make_optimizer, ppo_update, set_learning_rate
+from np_policy.threads import thread_counts, use_threads
 from np_sim.curriculum import CurriculumSchedule, CurriculumStartSampler
 from np_sim.env import ParkingVectorEnv
 from np_sim.clips import cached_training_pool, difficult_clips
@@ -122,26 +123,6 @@ def recorded_clips(skip: int) -> list:
         raise ConfigError(f"TrainConfig.site_recorded_skip: {skip} leaves none of the {len(difficult)} difficult "
                           "training clips for recorded resets")
     return difficult[skip:]
-
-
-def use_threads(n: int) -> None:
-    """Run torch and numba's parallel env loops on ``n`` threads each (numba's at most ``NUMBA_NUM_THREADS``; 0
-    leaves both at their defaults, all cores). Setting torch alone did not hold: numba's OpenMP layer sets the
-    process's OpenMP thread count to its own when its first parallel loop starts, after which torch ran on all
-    cores too, and a run meant to share a 2-core machine with another job spun two threads in every update (an
-    epoch about 10× slower)."""
-    if n:
-        import numba
-
-        numba.set_num_threads(min(n, numba.config.NUMBA_NUM_THREADS))
-        torch.set_num_threads(n)
-
-
-def thread_counts() -> dict[str, int]:
-    """The threads this process trains on: torch's and numba's counts (each epoch's metrics row records them)."""
-    import numba
-
-    return {"torch_threads": torch.get_num_threads(), "numba_threads": numba.get_num_threads()}
 
 
 class Trainer:

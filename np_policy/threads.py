@@ -1,0 +1,22 @@
+"""How many threads torch and numba's parallel loops run on in one process (training, autoencoder pretraining)."""
+
+from __future__ import annotations
+
+import numba
+import torch
+
+
+def use_threads(n: int) -> None:
+    """Run torch and numba's parallel env loops on ``n`` threads each (numba's at most ``NUMBA_NUM_THREADS``; 0
+    leaves both at their defaults, all cores). Setting torch alone did not hold: numba's OpenMP layer sets the
+    process's OpenMP thread count to its own when its first parallel loop starts, after which torch ran on all
+    cores too, and a run meant to share a 2-core machine with another job spun two threads in every update (an
+    epoch about 10× slower)."""
+    if n:
+        numba.set_num_threads(min(n, numba.config.NUMBA_NUM_THREADS))
+        torch.set_num_threads(n)
+
+
+def thread_counts() -> dict[str, int]:
+    """The threads this process trains on: torch's and numba's counts (each epoch's metrics row records them)."""
+    return {"torch_threads": torch.get_num_threads(), "numba_threads": numba.get_num_threads()}
