@@ -373,8 +373,10 @@ class FrozenBevEncoder:
 
     @torch.no_grad()
     def __call__(self, images: np.ndarray) -> np.ndarray:
-        with small_convolutions():
-            return self.encoder(as_input(images)).numpy()
+        # a channels-last batch lets oneDNN run these 3- to 8-channel convolutions faster than torch's own kernels
+        # (`small_convolutions`, the faster choice for the channels-first training step): 128 images on one thread
+        # in about 50 ms instead of 80-120 ms here; the latents agree to about 1e-6
+        return self.encoder(as_input(images).contiguous(memory_format=torch.channels_last)).numpy()
 
 
 _FROZEN: dict[str, FrozenBevEncoder] = {}

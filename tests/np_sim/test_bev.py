@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import Point, Polygon
 
-from np_sim.bev import BevConfig, render_bev
+from np_sim.bev import BevConfig, _average, render_bev
 from np_sim.errors import ConfigError
 from np_sim.frames import place
 from np_sim.scene import Scene
@@ -250,3 +250,18 @@ def test_bad_tail_shape_is_an_error():
         render_bev_batch(arrays, [0], [[0.0, 0.0, 0.0]], np.zeros((1, 2, 3)), [3])
     with pytest.raises(ValueError, match="scene_index must lie in"):
         render_bev_batch(arrays, [1], [[0.0, 0.0, 0.0]])
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), ss=st.sampled_from([1, 2, 3, 4, 7, 64]), labels=st.integers(1, 24))
+def test_pixels_are_the_rounded_mean_colour_of_their_samples_against_numpy(seed, ss, labels):
+    """A pixel against numpy's mean over its ss × ss samples, rounded half up, for any integer palette and
+    supersampling up to 64."""
+    rng = np.random.default_rng(seed)
+    size = 2 if ss == 64 else 6
+    palette = rng.integers(0, 256, (labels, 3)).astype(float)
+    label = rng.integers(0, labels, (size * ss, size * ss)).astype(np.uint8)
+    out = np.empty((3, size, size), np.uint8)
+    _average(label, palette, ss, out)
+    colours = palette[label].reshape(size, ss, size, ss, 3).mean(axis=(1, 3))
+    np.testing.assert_array_equal(out, np.floor(colours + 0.5).astype(np.uint8).transpose(2, 0, 1))
