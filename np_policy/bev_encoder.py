@@ -173,8 +173,9 @@ class BevAutoencoder(nn.Module):
 
 @contextlib.contextmanager
 def small_convolutions():
-    """Context for this network's convolutions: torch's own kernels instead of oneDNN's, which took twice the CPU
-    time for these 3- to 8-channel layers on this project's machine (training step and encoder alike)."""
+    """Context for this network's channels-first convolutions (pretraining): torch's own kernels instead of
+    oneDNN's, which took twice the CPU time for these 3- to 8-channel layers on this project's machine. The frozen
+    encoder instead feeds oneDNN a channels-last batch, faster still (`FrozenBevEncoder`)."""
     before = torch.backends.mkldnn.enabled
     torch.backends.mkldnn.enabled = False
     try:
