@@ -53,13 +53,13 @@ HOPE_EPISODE_S = 0.19
 8.7 s of CPU time) and updates (47.4 and 52.3 s) of a run completed 316 and 310 episodes (compute estimates;
 measured as process CPU time with the machine's two cores shared by other jobs, when the wall clock ran about ten
 times longer)."""
-HOPE_BACKBONE_EPISODE_S = {"none": 0.62, "bev": 1.0, "vertices": 0.77}
-"""Seconds per training episode of the HOPE-style backbones of Table III on this machine (compute estimates): one
-collect of 8,192 transitions from 16 Topology-Stress envs took 5.6 / 27.1 / 7.6 s of CPU time (none / BEV, with
-the raster and the frozen encoder / vertices) and one of the update's ten epochs 5.2 / 6.7 / 6.5 s, i.e. 58 / 94 /
-73 s per update; the untrained policies' collects ended 62 / 84 / 135 episodes (full-range starts, most running
-to the 200-step budget), 94 on average, which gives these figures. The backbones have no RS takeover, so their
-episodes are longer than the adapted HOPE's (`HOPE_EPISODE_S`); measured as process CPU time on the shared machine."""
+HOPE_BACKBONE_EPISODE_S = {"none": 0.55, "bev": 0.9, "vertices": 0.34}
+"""Seconds per training episode of the HOPE-style backbones of Table III on this machine (compute estimates): the
+finished runs' wall-clock seconds (``collect_s + update_s`` summed over ``metrics.jsonl``) over their episodes.
+none: 0.46 / 0.61 / 0.58 (seeds 0–2), BEV seed 0: 0.90, all beside other jobs whose threads spun against theirs
+(`np_policy.threads`); vertices seed 0 (the attention-based branch): 0.34, on one thread beside a one-thread
+training run, 56 min for 10,038 episodes. The backbones have no RS takeover, so their episodes are longer than the
+adapted HOPE's (`HOPE_EPISODE_S`)."""
 TRAINERS = {"np_policy.train": ("epoch", "best.pt"), "hope_policy.train": ("episodes", "final.pt")}
 """The modules that train a configuration (``python -m``): the ``metrics.jsonl`` field that counts a run's progress
 and the file a finished run holds (its output, the checkpoint that is evaluated; `RunSpec.output`)."""
