@@ -56,12 +56,13 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import first, git_state, run_folder, write_records
+from experiments.common import first, run_folder, write_records
 from experiments.overrides import apply_overrides
 from experiments.registry import PlannerOptions, build_planners, check_names, label
 from np_sim.cli import cli_boundary, fresh_folder, positive_int, vehicle_spec
 from np_sim.errors import ConfigError
 from np_sim.plan import PLAN_STAGES
+from np_sim.provenance import git_state
 from tracking.clip_run import ClipRunConfig
 from tracking.rerun_log import merge_recordings
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import csv
 import json
 import numbers
-import subprocess
 import time
 from pathlib import Path
 from typing import Any
@@ -44,34 +43,6 @@ def first(items: list, limit: int | None, name: str = "--limit") -> list:
     if limit is not None and (isinstance(limit, bool) or not isinstance(limit, numbers.Integral) or limit < 1):
         raise ConfigError(f"{name}: expected a positive integer (or none for all), got {limit!r}")
     return items[:limit]
-
-
-REPO_ROOT = Path(__file__).resolve().parents[1]
-"""The checkout this package runs from (git is asked about it, whatever the working directory)."""
-
-
-def _git(*args: str) -> str | None:
-    try:
-        return subprocess.run(["git", *args], capture_output=True, text=True, check=True, cwd=REPO_ROOT).stdout
-    except (OSError, subprocess.CalledProcessError):
-        return None
-
-
-def git_commit() -> str:
-    """The current git commit, or 'unknown' outside a checkout."""
-    out = _git("rev-parse", "HEAD")
-    return out.strip() if out else "unknown"
-
-
-def git_state() -> dict[str, Any]:
-    """Which code made a result, for its ``config.json``: ``git_commit`` and ``git_modified``, the Python files of
-    the working tree that are not as in that commit (edited, or new and not ignored): a result made from edited code
-    cannot be reproduced from the commit alone; an empty list says it can. Outside a checkout: 'unknown' and None."""
-    commit = git_commit()
-    edited = _git("diff", "HEAD", "--name-only", "--", "*.py") if commit != "unknown" else None
-    new = _git("ls-files", "--others", "--exclude-standard", "--", "*.py") if edited is not None else None
-    modified = None if edited is None or new is None else sorted({*edited.splitlines(), *new.splitlines()})
-    return {"git_commit": commit, "git_modified": modified}
 
 
 def write_records(folder: Path, records: list[dict[str, Any]]) -> None:

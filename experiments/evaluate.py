@@ -33,13 +33,14 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import first, git_state, mean_sd, write_records
+from experiments.common import first, mean_sd, write_records
 from experiments.progress import EpisodeProgress, check_out, progress_folder
 from np_policy.config import ACTIONS, PAPER, PRESETS, NeuralParkerConfig
 from np_policy.planner import NeuralParkerPlanner
 from np_sim.benchmarks import frozen_starts, load_benchmark
 from np_sim.cli import cli_boundary, existing_file, non_negative_int, positive_int, vehicle_spec
 from np_sim.config import CONNECTOR_VARIANTS
+from np_sim.provenance import git_state
 from np_sim.validate import plan_valid
 from np_sim.vehicle import VehicleSpec
 

@@ -22,12 +22,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from experiments.common import git_state, run_folder, write_records
+from experiments.common import run_folder, write_records
 from experiments.paper import (ARMS, HOPE_ACTION, SEEDS, ArmResult, bar_figure, family_lines, family_success,
                                measure, run_root, summarise, table_section)
 from experiments.paper_numbers import METRICS, PaperTable
 from experiments.sweep_plan import PAPER_PLAN, active_trainers, expand
 from np_sim.cli import cli_boundary, fresh_folder
+from np_sim.provenance import git_state
 
 HOW = __doc__[__doc__.index("Each reads"):]
 """What every table module does, for its ``--help``."""

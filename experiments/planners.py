@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import first, git_state, write_records
+from experiments.common import first, write_records
 from experiments.progress import EpisodeProgress, check_out, progress_folder
 from experiments.registry import PlannerOptions, build_planners, check_names, label
 from experiments.scene_files import (add_scene_arguments, describe, episode_scenes, load_scene_files, scene_columns,
@@ -46,6 +46,7 @@ from hope_policy.config import HOPE_ACTIONS
 from np_sim.cli import cli_boundary, non_negative_int, positive_int, vehicle_spec
 from np_sim.collision import path_valid
 from np_sim.planners import HybridAStar
+from np_sim.provenance import git_state
 from np_sim.validate import plan_valid, scoring_rule
 from np_sim.vehicle import VehicleSpec
 

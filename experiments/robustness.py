@@ -52,7 +52,7 @@ from tqdm import tqdm
 
 from experiments.closed_loop import (CLIP_SPLITS, PLANNERS, SITE_PLANNERS, ClosedLoopConfig, default_workers,
                                      planner_names)
-from experiments.common import git_state, run_folder
+from experiments.common import run_folder
 from experiments.overrides import apply_overrides
 from experiments.registry import PlannerOptions, build_planners, check_names
 from experiments.robustness_report import FailureCase, factor_figure, failure_cases, format_table
@@ -61,6 +61,7 @@ from experiments.scene_files import scene_file
 from experiments.track import PLANNERS as TRACK_PLANNERS
 from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int, vehicle_spec
 from np_sim.errors import ConfigError
+from np_sim.provenance import git_state
 from np_sim.vehicle import VehicleSpec
 from tracking.controllers import CONTROLLERS
 from tracking.disturbance import FACTORS, LEVELS

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from experiments.common import git_state, run_folder, write_records
+from experiments.common import run_folder, write_records
 from experiments.registry import REGISTRY, PlannerOptions, build_planners, check_names, label
 from experiments.scene_files import scene_file, strictest
 from np_sim.cli import cli_boundary, fresh_folder, non_negative_int, vehicle_spec
@@ -37,6 +37,7 @@ from np_sim.collision import path_valid
 from np_sim.errors import CapacityError, ConfigError, SceneError, StartInCollisionError
 from np_sim.plan import Plan
 from np_sim.plotting import plot_scene, target_marker
+from np_sim.provenance import git_state
 from np_sim.scene import Scene
 from np_sim.scene_starts import draw_starts
 from np_sim.vehicle import VehicleSpec

@@ -35,12 +35,13 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import first, git_state, run_folder, write_records
+from experiments.common import first, run_folder, write_records
 from experiments.registry import PlannerOptions, build_planners, check_names
 from experiments.scene_files import (add_scene_arguments, describe, episode_scenes, load_scene_files, scene_columns,
                                      starts_summary)
 from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int, vehicle_spec
 from np_sim.errors import ConfigError
+from np_sim.provenance import git_state
 from np_sim.vehicle import VehicleSpec
 from tracking.config import TrackerConfig
 from tracking.controllers import CONTROLLERS

@@ -48,17 +48,19 @@ from hope_policy.ppo import HopePPO, HopePPOConfig
 from hope_policy.spaces import observation_space
 from np_policy.checkpoint import CheckpointError, check_config, load_weights, write_atomic
 from np_policy.config import CURRICULUM_REGIONS, check_types
+from np_policy.threads import thread_counts
 from np_policy.train import curriculum_scenes, merge_config, prepare_run_folder, read_metrics, write_metrics
 from np_sim.benchmarks import load_benchmark
 from np_sim.cli import cli_boundary, non_negative_int, positive_float, positive_int
 from np_sim.config import config_from_dict
 from np_sim.curriculum import CurriculumSchedule, CurriculumStartSampler
 from np_sim.errors import ConfigError
+from np_sim.provenance import PROVENANCE_FILE, record_start
 
 BENCHMARKS = ("factorial", "topology")
 RUN_FILES = ("metrics.jsonl", "snapshot.pt", "final.pt")
 """A folder holding any of these holds a training run."""
-REPLACED_FILES = (*RUN_FILES, "config.json")
+REPLACED_FILES = (*RUN_FILES, "config.json", PROVENANCE_FILE)
 """What ``overwrite`` removes (with the TensorBoard event files) before a new run starts there."""
 EVENTS_GLOB = "events.out.tfevents.*"
 
@@ -328,6 +330,7 @@ def train(config: HopeTrainConfig, out: str | Path, resume: bool = False, overwr
         rows = [r for r in read_metrics(metrics_path, key="update") if r["update"] <= trainer.updates]
     write_atomic(out / "config.json", json.dumps(config.to_dict(), indent=2).encode())
     write_metrics(metrics_path, rows)
+    record_start(out, update=trainer.updates, episodes=trainer.episodes, **thread_counts())
     writer = SummaryWriter(str(out), purge_step=trainer.updates + 1 if resume else None)
     bar = tqdm(total=config.episodes, initial=min(trainer.episodes, config.episodes), desc="episodes",
                unit="ep", disable=not progress)

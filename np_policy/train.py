@@ -47,6 +47,7 @@ from np_sim.env import ParkingVectorEnv
 from np_sim.clips import cached_training_pool, difficult_clips
 from np_sim.cli import vehicle_spec
 from np_sim.errors import ConfigError, NPSimError
+from np_sim.provenance import PROVENANCE_FILE, record_start
 from np_sim.scene import Scene
 from np_sim.starts import UniformStartSampler, fixed_start_sampler
 
@@ -56,7 +57,7 @@ RUN_FILES = ("metrics.jsonl", "snapshot.pt", "best.pt")
 """A folder holding any of these holds a training run: a new run there needs ``overwrite``."""
 EVENT_FILES = "events.out.tfevents.*"
 """The run's TensorBoard event files (a glob pattern)."""
-REPLACED_FILES = (*RUN_FILES, "curves.png", "config.json", EVENT_FILES)
+REPLACED_FILES = (*RUN_FILES, "curves.png", "config.json", PROVENANCE_FILE, EVENT_FILES)
 """What ``overwrite`` removes before a new run starts in an existing run folder: names or glob patterns (the site
 pool is a cache keyed by its settings and stays)."""
 
@@ -528,6 +529,7 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
         trainer.initialize_from(init)
     write_atomic(out / "config.json", json.dumps(config.to_dict(), indent=2).encode())
     write_metrics(out / "metrics.jsonl", rows)
+    record_start(out, epoch=trainer.epoch, **thread_counts())
     bar = tqdm(range(trainer.epoch, last), desc="epochs", unit="epoch", disable=not progress,
                initial=trainer.epoch, total=last)
     writer = event_writer(out, rows, trainer.epoch) if tensorboard else None

@@ -1,10 +1,10 @@
-"""`experiments.common.git_state`: a result's config names the commit and any edited Python file it ran with."""
+"""`np_sim.provenance.git_state`: a result names the commit and any edited Python file it ran with."""
 
 import subprocess
 
 import pytest
 
-from experiments import common
+from np_sim import provenance as common
 
 
 def _git(repo, *args):

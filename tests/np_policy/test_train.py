@@ -547,3 +547,14 @@ def test_rows_record_the_thread_counts_and_a_resume_on_others_warns(tmp_path, ca
                         lambda: {"torch_threads": rows[-1]["torch_threads"] + 1, "numba_threads": 1})
     train(config, tmp_path / "run", epochs=4, resume=True, progress=False)
     assert "resuming on {'torch_threads': " in capsys.readouterr().err
+
+
+def test_each_start_and_resume_is_logged_with_its_code_and_threads(tmp_path):
+    config = TrainConfig.from_dict(TINY)
+    train(config, tmp_path / "run", epochs=2, progress=False)
+    train(config, tmp_path / "run", epochs=3, resume=True, progress=False)
+    starts = [json.loads(line) for line in (tmp_path / "run" / "provenance.jsonl").read_text().splitlines()]
+    assert [s["epoch"] for s in starts] == [0, 2]
+    assert all(s["git_commit"] and "git_modified" in s and s["torch_threads"] >= 1 for s in starts)
+    train(config, tmp_path / "run", epochs=2, overwrite=True, progress=False)  # a new run: a new log
+    assert len((tmp_path / "run" / "provenance.jsonl").read_text().splitlines()) == 1

@@ -1,0 +1,51 @@
+"""Which code made a result: the git commit of this checkout and the Python files edited since it; for a long run
+that is resumed, one line per start (``provenance.jsonl``)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+PROVENANCE_FILE = "provenance.jsonl"
+"""A training run's log of its starts and resumes (`record_start`)."""
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+"""The checkout this package runs from (git is asked about it, whatever the working directory)."""
+
+
+def _git(*args: str) -> str | None:
+    try:
+        return subprocess.run(["git", *args], capture_output=True, text=True, check=True, cwd=REPO_ROOT).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return None
+
+
+def git_commit() -> str:
+    """The current git commit, or 'unknown' outside a checkout."""
+    out = _git("rev-parse", "HEAD")
+    return out.strip() if out else "unknown"
+
+
+def git_state() -> dict[str, Any]:
+    """Which code made a result, for its ``config.json``: ``git_commit`` and ``git_modified``, the Python files of
+    the working tree that are not as in that commit (edited, or new and not ignored): a result made from edited code
+    cannot be reproduced from the commit alone; an empty list says it can. Outside a checkout: 'unknown' and None."""
+    commit = git_commit()
+    edited = _git("diff", "HEAD", "--name-only", "--", "*.py") if commit != "unknown" else None
+    new = _git("ls-files", "--others", "--exclude-standard", "--", "*.py") if edited is not None else None
+    modified = None if edited is None or new is None else sorted({*edited.splitlines(), *new.splitlines()})
+    return {"git_commit": commit, "git_modified": modified}
+
+
+def record_start(folder: Path, **fields: Any) -> None:
+    """Append to ``folder/provenance.jsonl`` one line for this start or resume of a long run: the UTC time, the
+    command line, ``fields`` (where the run starts, the threads it runs on) and the code (`git_state`). A run resumed
+    under other code or other thread counts shows it here."""
+    line = {"started_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "argv": sys.argv, **fields,
+            **git_state()}
+    with (Path(folder) / PROVENANCE_FILE).open("a", encoding="utf-8") as fh:
+        fh.write(json.dumps(line) + "\n")
