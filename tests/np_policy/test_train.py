@@ -102,8 +102,9 @@ def test_cli_writes_metrics_curves_and_checkpoints(finished_run):
         assert (run / name).stat().st_size > 0
     assert [json.loads(line)["epoch"] for line in (run / "metrics.jsonl").read_text().splitlines()] == [1, 2]
     names = sorted(p.name for p in run.iterdir())  # no temporary file left behind
-    assert len(names) == 6 and names[3].startswith("events.out.tfevents.")
-    assert names[:3] + names[4:] == ["best.pt", "config.json", "curves.png", "metrics.jsonl", "snapshot.pt"]
+    assert len(names) == 7 and names[3].startswith("events.out.tfevents.")
+    assert names[:3] + names[4:] == ["best.pt", "config.json", "curves.png", "metrics.jsonl", "provenance.jsonl",
+                                     "snapshot.pt"]
     best = load_checkpoint(run / "best.pt", expected_config=TrainConfig.from_dict(TINY | {"seed": 0}).to_dict())
     assert {"model", "config", "return_rms", "epoch", "selection_reward"} <= set(best)
 
