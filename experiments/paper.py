@@ -358,13 +358,15 @@ def training_hours(configurations, runs: dict) -> float:
 
 
 def compute_line(results: list[ArmResult], runs: dict) -> str:
-    """Training CPU-hours (epoch wall times × this machine's cores, which torch uses) and planning CPU-hours."""
+    """Training CPU-hours, at most (epoch wall times × this machine's cores: runs on fewer threads used fewer) and
+    planning CPU-hours."""
     cores = os.cpu_count() or 1
     hours = training_hours(dict.fromkeys(r.arm.configuration for r in results), runs)
     planning_s = sum(row["plan_time_ms"] for r in results for rows in r.records.values() for row in rows) / 1e3
     planning = f"{planning_s / 60:.1f} CPU-min" if planning_s >= 60 else f"{planning_s:.0f} CPU-s"
-    return (f"Compute: training {hours:.1f} h wall-clock so far ({hours * cores:.1f} CPU-h on this {cores}-core "
-            f"machine, from the runs' `metrics.jsonl` epoch times; runs shared with other tables are counted in "
+    return (f"Compute: training {hours:.1f} h wall-clock so far (at most {hours * cores:.1f} CPU-h on this "
+            f"{cores}-core machine: a run given every core counts them all, one run on one thread beside another "
+            f"counts one; from the runs' `metrics.jsonl` epoch times; runs shared with other tables are counted in "
             f"each), evaluation {planning} of planning (sum of the records' plan times).")
 
 
