@@ -211,12 +211,10 @@ def default_workers() -> int:
 def _init_worker(names: list[str], options: PlannerOptions, split: str) -> None:
     # one thread each for torch, numba's parallel loops and Mesa's software renderer: the pool already has a
     # process per core, and more threads than cores only wait on each other
-    import numba
-    import torch
+    from np_policy.threads import use_threads
 
     os.environ["LP_NUM_THREADS"] = "1"  # read when the first off-screen GL context is made, after this
-    torch.set_num_threads(1)
-    numba.set_num_threads(1)
+    use_threads(1)
     _WORKER["clips"] = split_clips(split)
     _WORKER["planners"] = build_planners(names, options)
 

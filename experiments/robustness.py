@@ -140,11 +140,9 @@ class RecordLog:
 
 def _quiet_threads() -> None:
     """One thread each for torch and numba in a worker: the pool already has a worker per core."""
-    import numba
-    import torch
+    from np_policy.threads import use_threads
 
-    torch.set_num_threads(1)
-    numba.set_num_threads(1)
+    use_threads(1)
 
 
 class StudyWorker:

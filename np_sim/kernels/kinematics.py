@@ -78,9 +78,8 @@ def sample_arcs(x: float, y: float, th: float, arcs: np.ndarray, ds: float):
         steer = -gear * kappa
         if rows[k, 4] == 0.0:
             rows[k, 3], rows[k, 4] = steer, gear
+        sample_arc_into(x, y, th, kappa, length, rows[k + 1:k + n + 1, :3])
         for j in range(1, n + 1):
-            px, py, pth = arc_point(x, y, th, kappa, length * j / n)
-            rows[k + j, 0], rows[k + j, 1], rows[k + j, 2] = px, py, pth
             rows[k + j, 3], rows[k + j, 4], rows[k + j, 5] = steer, gear, s + abs(length) * j / n
         k += n
         x, y, th = rows[k, 0], rows[k, 1], rows[k, 2]
