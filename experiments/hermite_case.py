@@ -173,19 +173,25 @@ def run(checkpoint: Path = DEFAULT_CHECKPOINT, start_seed: int = 0, out: Path | 
     return {"folder": folder, "png": folder / "hermite_case.png", "table": table, "case": case}
 
 
-def case_main(name: str, doc: str, run_case, argv=None) -> dict:
+def case_main(name: str, doc: str, run_case, argv=None, benchmarks: tuple[str, ...] = ()) -> dict:
     """The command line shared by the single-case figures (``experiments.<name>``): ``--checkpoint``,
-    ``--start-seed`` and ``--out``, then ``run_case(checkpoint, start_seed, out)``; prints the table and the PNG."""
+    ``--start-seed`` and ``--out`` (and ``--benchmark`` when ``benchmarks`` names more than one), then
+    ``run_case(checkpoint, start_seed, out[, benchmark=...])``; prints the table and the PNG."""
     parser = argparse.ArgumentParser(prog=f"python -m experiments.{name}", description=doc,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--checkpoint", type=existing_file, default=DEFAULT_CHECKPOINT,
-                        help=f"NeuralParker checkpoint (default {DEFAULT_CHECKPOINT})")
+    if benchmarks:
+        parser.add_argument("--benchmark", choices=benchmarks, default=benchmarks[0],
+                            help=f"training scenes to pin the case on (default {benchmarks[0]})")
+    parser.add_argument("--checkpoint", type=existing_file, default=None if benchmarks else DEFAULT_CHECKPOINT,
+                        help="NeuralParker checkpoint (default: " + ("the benchmark's, see above" if benchmarks
+                                                                     else str(DEFAULT_CHECKPOINT)) + ")")
     parser.add_argument("--start-seed", type=non_negative_int, default=0,
                         help="seed of the one full-range start per training scene (default 0)")
     parser.add_argument("--out", type=fresh_folder,
                         help=f"new or empty run folder (default: a fresh results/{name}/<timestamp>)")
     args = parser.parse_args(argv)
-    result = run_case(args.checkpoint, args.start_seed, args.out)
+    extra = {"benchmark": args.benchmark} if benchmarks else {}
+    result = run_case(args.checkpoint, args.start_seed, args.out, **extra)
     print(result["table"])
     print(f"wrote {result['png']}")
     return result

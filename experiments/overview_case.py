@@ -1,20 +1,26 @@
 """Unified NeuralParker versus the staged Hybrid A* → learned planner on one pinned case (paper Fig. ``fig:overview``,
 §V-A, Table ``tab:twostage``).
 
-``python -m experiments.overview_case [--checkpoint PATH] [--start-seed S] [--out DIR]``
+``python -m experiments.overview_case [--benchmark factorial|topology] [--checkpoint PATH] [--start-seed S]
+[--out DIR]``
 
-One checkpoint (default the shipped Factorial one) drives the unified arm and the staged arm's downstream stage
-(`np_policy.staged.StagedPlanner`: a region-goal Hybrid A* prefix to the first state within 10 m of the target,
-then the policy from there). The paper's diagnostic hands over to the adapted HOPE planner: when its seed-0
-checkpoint exists (``HOPE_CHECKPOINT``), a third arm, Hybrid A* → HOPE, plans the same case from the same start
-(drawn whether it succeeds or not: the case is pinned by the first two arms). The paper pins a Topology-Stress pocket case (Type 2) with the Topology-Stress
-vertices policy; until that policy is trained, the case is pinned on the Factorial **training** split by this
-rule: the first long-range scene in benchmark order whose full-range start (`np_sim.starts.UniformStartSampler`,
-seed ``--start-seed``) lies beyond the hand-off radius and that both arms solve. No frozen test start is looked
-at. Writes ``overview_case.png`` (each planner one line; the staged arm's prefix, downstream arcs and connector
-share the dashed green line; the dashed circle is the hand-off boundary), ``case.md`` (L, reversals, Δκ of
-eq:metrics, the staged Δκ without the hand-off jump, and plan time per arm) and ``case.json`` into a fresh run
-folder.
+One checkpoint drives the unified arm and the staged arm's downstream stage (`np_policy.staged.StagedPlanner`: a
+region-goal Hybrid A* prefix to the first state within 10 m of the target, then the policy from there). The case is
+pinned on the **training** split by one rule: the first scene in benchmark order whose full-range start
+(`np_sim.starts.UniformStartSampler`, seed ``--start-seed``) lies beyond the hand-off radius and that both arms
+solve. No frozen test start is looked at.
+
+- ``--benchmark topology`` is the paper's figure: a Topology-Stress pocket scene (Type 2, the route-choice family
+  whose entrance faces away from the arrival side) driven by the Topology-Stress vertices policy (default
+  ``POCKET_CHECKPOINT``, the NeuralParker-backbone vertices run of the sweep, seed 0).
+- ``--benchmark factorial`` (the default until that run is finished) pins a long-range Factorial scene with the
+  shipped Factorial checkpoint; as in the paper's diagnostic a third arm, Hybrid A* → adapted HOPE, plans the same
+  case from the same start when the HOPE seed-0 checkpoint exists (``HOPE_CHECKPOINT``; drawn whether it succeeds
+  or not: the case is pinned by the first two arms).
+
+Writes ``overview_case.png`` (each planner one line; the staged arm's prefix, downstream arcs and connector share
+the dashed green line; the dashed circle is the hand-off boundary), ``case.md`` (L, reversals, Δκ of eq:metrics,
+the staged Δκ without the hand-off jump, and plan time per arm) and ``case.json`` into a fresh run folder.
 """
 
 from __future__ import annotations
@@ -38,42 +44,55 @@ from np_sim.scene import Scene
 
 UNIFIED, STAGED, STAGED_HOPE = "Unified NP", "Hybrid A* → NP", "Hybrid A* → HOPE"
 HOPE_CHECKPOINT = Path("checkpoints/runs/factorial_hope_seed0/final.pt")
-"""The adapted HOPE planner of the third arm (seed 0 of the complete baseline on Factorial)."""
+"""The adapted HOPE planner of the Factorial case's third arm (seed 0 of the complete baseline on Factorial)."""
+POCKET_CHECKPOINT = Path("checkpoints/runs/topology_np_vertices_seed0_lot/best.pt")
+"""The paper's policy for this figure: Topology-Stress, NeuralParker backbone with target-relative vertices, seed 0."""
+CASE_SCENES = {"factorial": lambda scene: scene.tags.get("distance") == "long",
+               "topology": lambda scene: scene.tags.get("family") == "type2"}
+"""Which training scenes each benchmark's case may be pinned on: long-range Factorial scenes; Topology-Stress
+pockets."""
+DEFAULT_CHECKPOINTS = {"factorial": DEFAULT_CHECKPOINT, "topology": POCKET_CHECKPOINT}
 
 
-def staged_note(hope: bool) -> str:
-    """Which learned planners the staged arms hand over to."""
+def staged_note(benchmark: str, checkpoint: Path, hope: bool) -> str:
+    """Which policy drives the learned arms and which planners the staged arms hand over to."""
+    if benchmark == "topology":
+        return (f"both learned arms are driven by the Topology-Stress vertices policy `{checkpoint}`, as in the "
+                "paper's figure")
     if hope:
-        return ("the staged arms hand over to NeuralParker and, as in the paper's diagnostic, to the adapted HOPE "
-                f"planner ({HOPE_CHECKPOINT}); the case is pinned by the first two arms")
-    return (f"the staged arm uses NeuralParker downstream; the paper's diagnostic hands over to the adapted HOPE "
-            f"planner, whose arm needs {HOPE_CHECKPOINT}")
+        return (f"the learned arms are driven by `{checkpoint}`; the staged arms hand over to NeuralParker and, as in "
+                f"the paper's diagnostic, to the adapted HOPE planner (`{HOPE_CHECKPOINT}`); the case is pinned by "
+                "the first two arms")
+    return (f"the learned arms are driven by `{checkpoint}`; the paper's diagnostic also hands over to the adapted "
+            f"HOPE planner, whose arm needs `{HOPE_CHECKPOINT}`")
 
 
 def find_case(unified: NeuralParkerPlanner, staged: StagedPlanner, scenes: list[Scene],
               starts: np.ndarray) -> tuple[Scene, np.ndarray, dict[str, Plan]]:
-    """The pinned case by the rule of the module docstring: (scene, start, {arm: plan})."""
+    """The pinned case by the rule of the module docstring among ``scenes`` (already the benchmark's candidates):
+    (scene, start, {arm: plan})."""
     for scene, start in zip(scenes, starts):
-        if scene.tags.get("distance") != "long":
-            continue
         if np.hypot(*(start[:2] - np.asarray(scene.target[:2], float))) <= staged.handoff_radius_m:
             continue
         plans = {UNIFIED: unified.plan(scene, start), STAGED: staged.plan(scene, start)}
         if all(plan.success for plan in plans.values()):
             return scene, start, plans
-    raise RuntimeError("overview_case: no long-range training start beyond the hand-off radius that both arms solve")
+    raise RuntimeError("overview_case: no training start beyond the hand-off radius that both arms solve")
 
 
-def format_case(scene: Scene, plans: dict[str, Plan]) -> str:
-    """Markdown: one row per arm with eq:metrics and plan time (a failed arm: its reason)."""
-    lines = [f"Scene `{scene.name}` (training split); {staged_note(STAGED_HOPE in plans)}.", "",
-             "| Arm | Succ. | L (m) | Rev. | Δκ | plan time (ms) |", "|---|---|---|---|---|---|"]
+def format_case(scene: Scene, plans: dict[str, Plan], note: str, plan_time: bool = True) -> str:
+    """Markdown: one row per arm with eq:metrics and, with ``plan_time``, the plan time measured while the case was
+    pinned (a failed arm: its reason)."""
+    time_head, time_rule = (" plan time (ms) |", "---|") if plan_time else ("", "")
+    lines = [f"Scene `{scene.name}` (training split); {note}.", "",
+             f"| Arm | Succ. | L (m) | Rev. | Δκ |{time_head}", f"|---|---|---|---|---|{time_rule}"]
     for arm, plan in plans.items():
+        time_cell = f" {1e3 * plan.plan_time_s:.1f} |" if plan_time else ""
         if not plan.success:
-            lines.append(f"| {arm} | 0 ({plan.reason}) | – | – | – | {1e3 * plan.plan_time_s:.1f} |")
+            lines.append(f"| {arm} | 0 ({plan.reason}) | – | – | – |{time_cell}")
             continue
         L, rev, dk = plan.metrics()
-        lines.append(f"| {arm} | 1 | {L:.2f} | {rev} | {dk:.2f} | {1e3 * plan.plan_time_s:.1f} |")
+        lines.append(f"| {arm} | 1 | {L:.2f} | {rev} | {dk:.2f} |{time_cell}")
     return "\n".join(lines)
 
 
@@ -105,35 +124,43 @@ def draw_case(scene: Scene, plans: dict[str, Plan], radius_m: float, vehicle, pn
     figure.savefig(png, dpi=120)
 
 
-def run(checkpoint: Path = DEFAULT_CHECKPOINT, start_seed: int = 0, out: Path | None = None,
-        scenes: list[Scene] | None = None) -> dict:
-    """Pin the case (on ``scenes``, default the Factorial training split), draw it and write its table."""
-    unified = NeuralParkerPlanner.from_checkpoint(checkpoint, benchmark="factorial")
+def run(checkpoint: Path | None = None, start_seed: int = 0, out: Path | None = None,
+        scenes: list[Scene] | None = None, benchmark: str = "factorial") -> dict:
+    """Pin the case on ``benchmark``'s training scenes (``scenes``: the candidates to pin it on, default that
+    benchmark's ``CASE_SCENES``), draw it and write its table. ``checkpoint`` defaults to ``DEFAULT_CHECKPOINTS``.
+    Returns the folder, the PNG, the table with plan times (``table``) and without them (``path_table``: what a
+    report regenerated on another machine, or under another load, can quote unchanged)."""
+    if benchmark not in CASE_SCENES:
+        raise ValueError(f"overview_case: benchmark must be one of {sorted(CASE_SCENES)}, got {benchmark!r}")
+    checkpoint = Path(DEFAULT_CHECKPOINTS[benchmark] if checkpoint is None else checkpoint)
+    unified = NeuralParkerPlanner.from_checkpoint(checkpoint, benchmark=benchmark)
     staged = StagedPlanner(unified)
-    scenes = load_benchmark("factorial", "train") if scenes is None else scenes
-    starts = training_starts(scenes, start_seed)
-    scene, start, plans = find_case(unified, staged, scenes, starts)
-    if Path(HOPE_CHECKPOINT).exists():
+    if scenes is None:
+        scenes = [s for s in load_benchmark(benchmark, "train") if CASE_SCENES[benchmark](s)]
+    scene, start, plans = find_case(unified, staged, scenes, training_starts(scenes, start_seed))
+    if benchmark == "factorial" and Path(HOPE_CHECKPOINT).exists():
         from hope_policy.planner import HopePlanner
 
         plans[STAGED_HOPE] = StagedPlanner(HopePlanner.from_checkpoint(HOPE_CHECKPOINT), staged.search,
                                            name="staged_astar_hope").plan(scene, start)
     folder = run_folder("overview_case", out)
     draw_case(scene, plans, staged.handoff_radius_m, unified.env_config.vehicle, folder / "overview_case.png")
-    table = format_case(scene, plans)
+    note = staged_note(benchmark, checkpoint, STAGED_HOPE in plans)
+    table = format_case(scene, plans, note)
     (folder / "case.md").write_text(table + "\n")
     (folder / "case.json").write_text(json.dumps({
-        "checkpoint": str(checkpoint), "start_seed": start_seed, "scene": scene.name, "start": start.tolist(),
-        "note": staged_note(STAGED_HOPE in plans), "arms": {arm: dict(zip(("L", "reversals", "delta_kappa"), plan.metrics()),
-                                                success=plan.success, plan_time_s=plan.plan_time_s)
-                                      for arm, plan in plans.items()}}, indent=2, default=float))
-    return {"folder": folder, "png": folder / "overview_case.png", "table": table, "scene": scene.name}
+        "benchmark": benchmark, "checkpoint": str(checkpoint), "start_seed": start_seed, "scene": scene.name,
+        "start": start.tolist(), "note": note,
+        "arms": {arm: dict(zip(("L", "reversals", "delta_kappa"), plan.metrics()), success=plan.success,
+                           plan_time_s=plan.plan_time_s) for arm, plan in plans.items()}}, indent=2, default=float))
+    return {"folder": folder, "png": folder / "overview_case.png", "table": table, "scene": scene.name,
+            "path_table": format_case(scene, plans, note, plan_time=False)}
 
 
 @cli_boundary
 def main(argv=None) -> dict:
     """Command-line entry point (usage in the module docstring)."""
-    return case_main("overview_case", __doc__, run, argv)
+    return case_main("overview_case", __doc__, run, argv, benchmarks=tuple(CASE_SCENES))
 
 if __name__ == "__main__":
     main()

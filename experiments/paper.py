@@ -462,10 +462,32 @@ def table_section(paper: PaperTable, results: list[ArmResult], runs: dict) -> li
             ""]
 
 
-def case_sections(work: Path, figures: Path) -> dict[str, list[str]]:
-    """Figs. 2, 4 and 6: run the case modules into ``work`` and copy their PNGs to ``figures``."""
+def overview_arguments(runs: dict) -> dict:
+    """Fig. 4's ``overview_case.run`` arguments: the paper's Topology-Stress pocket case driven by the vertices policy
+    once its run (the sweep's NeuralParker-backbone vertices run, seed 0) is finished, the Factorial stand-in until
+    then."""
+    run = runs.get(("topology_np_vertices", 0))
+    if run is not None and run_state(run).kind == "finished":
+        return {"benchmark": "topology", "checkpoint": run.output}
+    return {"benchmark": "factorial"}
+
+
+def overview_text(benchmark: str) -> str:
+    """Fig. 4's note: what the case is pinned on, and that the table leaves out the live plan times."""
+    pinned = ("The case is the paper's kind: a Topology-Stress pocket (Type 2) training scene driven by the "
+              "Topology-Stress vertices policy (rule in `experiments.overview_case`)." if benchmark == "topology" else
+              "The paper pins a Topology-Stress pocket case (Type 2) driven by the Topology-Stress vertices policy; "
+              "that policy's run is not finished yet, so the case is pinned on a Factorial training scene with the "
+              "shipped Factorial checkpoint (rule in `experiments.overview_case`).")
+    return (f"{pinned} Plan times are left out here: they are measured live and move with the machine's load; "
+            f"`python -m experiments.overview_case --benchmark {benchmark}` prints them.")
+
+
+def case_sections(work: Path, figures: Path, overview: dict) -> dict[str, list[str]]:
+    """Figs. 2, 4 (``overview``: its ``overview_case.run`` arguments) and 6: run the case modules into ``work`` and
+    copy their PNGs to ``figures``."""
     made = {"fig:sceneexamples": scenes.run(out=work / "scenes"),
-            "fig:overview": overview_case.run(out=work / "overview_case"),
+            "fig:overview": overview_case.run(out=work / "overview_case", **overview),
             "fig:hermite-case": hermite_case.run(out=work / "hermite_case")}
     for label, result in made.items():
         shutil.copyfile(result["png"], figures / FIGURE_FILES[label])
@@ -480,10 +502,8 @@ def case_sections(work: Path, figures: Path) -> dict[str, list[str]]:
             "", "`python -m experiments.scenes`", ""],
         "fig:overview": [
             "## Fig. 4 (`fig:overview`): unified versus staged planning on one pinned case", "",
-            f"![overview case](figures/{FIGURE_FILES['fig:overview']})", "", made["fig:overview"]["table"], "",
-            "The paper pins a Topology-Stress pocket case (Type 2) driven by the Topology-Stress vertices policy; that "
-            "policy is not trained yet, so the case is pinned on a Factorial training scene with the shipped Factorial "
-            "checkpoint (rule in `experiments.overview_case`). `python -m experiments.overview_case`", ""],
+            f"![overview case](figures/{FIGURE_FILES['fig:overview']})", "", made["fig:overview"]["path_table"], "",
+            overview_text(overview["benchmark"]), ""],
         "fig:hermite-case": [
             "## Fig. 6 (`fig:hermite-case`): both connectors from one shared hand-off", "",
             f"![hermite case](figures/{FIGURE_FILES['fig:hermite-case']})", "", made["fig:hermite-case"]["table"], "",
@@ -522,7 +542,7 @@ def build_report(runs_root: Path, out_md: Path, evaluate: bool = True) -> str:
     figures = out_md.parent / "figures"
     figures.mkdir(parents=True, exist_ok=True)
     results = measure_all(runs, evaluate)
-    cases = case_sections(run_folder("paper", None), figures)
+    cases = case_sections(run_folder("paper", None), figures, overview_arguments(runs))
     main = results[MAIN_COMPARISON.label]
     main_stats, main_cohorts = summarise(main)
     topo = results[TOPOLOGY_STRESS.label]

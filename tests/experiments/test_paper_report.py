@@ -232,6 +232,39 @@ def test_overview_case_hands_over_inside_the_radius(tmp_path):
     assert "to the adapted HOPE planner" in result["table"]
 
 
+def test_fig4_moves_to_the_topology_pocket_case_once_the_vertices_run_is_finished(tmp_path):
+    runs = {(r.config.name, r.seed): r for r in expand(PAPER_PLAN, (0,), tmp_path)}
+    assert paper.overview_arguments(runs) == {"benchmark": "factorial"}
+    run = tmp_path / "topology_np_vertices_seed0_lot"
+    _metrics(run, 120, 40.0)
+    (run / "snapshot.pt").write_bytes(b"")
+    assert paper.overview_arguments(runs) == {"benchmark": "factorial"}  # interrupted at epoch 120
+    (run / "snapshot.pt").unlink()
+    _metrics(run, 240, 40.0)
+    (run / "best.pt").write_bytes(b"")
+    assert paper.overview_arguments(runs) == {"benchmark": "topology", "checkpoint": run / "best.pt"}
+    assert "Topology-Stress pocket (Type 2) training scene" in paper.overview_text("topology")
+    assert "--benchmark factorial" in paper.overview_text("factorial")
+
+
+@pytest.mark.skipif(not overview_case.POCKET_CHECKPOINT.exists(), reason="no Topology-Stress vertices checkpoint")
+def test_overview_case_on_topology_pins_a_pocket_scene_without_the_hope_arm(tmp_path):
+    train = [s for s in load_benchmark("topology", "train") if s.tags["family"] == "type2"][:4]
+    result = overview_case.run(None, 0, tmp_path / "case", scenes=train, benchmark="topology")
+    data = json.loads((tmp_path / "case" / "case.json").read_text())
+    scene = next(s for s in train if s.name == data["scene"])
+    assert data["benchmark"] == "topology" and data["checkpoint"] == str(overview_case.POCKET_CHECKPOINT)
+    assert Point(scene.target[:2]).distance(Point(data["start"][:2])) > 10.0
+    assert set(data["arms"]) == {"Unified NP", "Hybrid A* → NP"}
+    assert all(arm["success"] for arm in data["arms"].values())
+    assert "plan time" in result["table"] and "plan time" not in result["path_table"]
+    # the path table is the timed table with its last column taken away, row for row
+    for timed, untimed in zip(result["table"].splitlines()[3:], result["path_table"].splitlines()[3:]):
+        assert timed.rsplit("|", 2)[0] + "|" == untimed
+    with pytest.raises(ValueError, match="benchmark must be one of"):
+        overview_case.run(benchmark="site")
+
+
 @pytest.mark.parametrize("argv, words", [(["--out", "report.txt"], "ending in .md"),
                                          (["--runs", "no/such/folder"], "existing folder of run folders")])
 def test_paper_cli_refuses_bad_paths_with_one_error_line(capsys, argv, words):
