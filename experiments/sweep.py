@@ -7,7 +7,9 @@ Each run is a (configuration, benchmark, seed) with its own run folder under ``-
 ``checkpoints/runs``); the plan and how a folder's state is decided are in `experiments.sweep_plan`. The sweep
 starts a local Ray sized to this machine (or joins the cluster at ``--ray-address``; the run root must then be on
 storage every node shares, with the project installed on every node) and submits one Ray task per run that is
-not finished, requesting ``--cpus-per-run`` CPUs and, where the cluster has GPUs, ``--gpus-per-run`` GPUs. A task
+not finished, requesting ``--cpus-per-run`` CPUs and, where the cluster has GPUs, ``--gpus-per-run`` GPUs for each
+NeuralParker run (`GPU_TRAINERS`), which then trains its network with ``--device cuda`` (`np_policy.device`; a run
+resumed on another device than it trained on so far continues another curve, and the trainer warns). A task
 runs the configuration's trainer (``python -m np_policy.train``; ``hope_policy.train`` for the adapted HOPE) in a
 subprocess (its log under ``--log-dir``): with ``--resume`` when the
 folder holds ``snapshot.pt``, from epoch 0 otherwise (``--overwrite`` when a run killed before its first snapshot
@@ -41,12 +43,25 @@ POLL_S = 2.0
 """Seconds between progress refreshes."""
 
 
-def train_argv(run: RunSpec, config_file: Path) -> list[str]:
+GPU_TRAINERS = ("np_policy.train",)
+"""Trainers that use a GPU given to their task (``--device cuda``): NeuralParker's PPO update of 8,192-sample
+minibatches. The adapted HOPE's minibatches of 32 gain nothing on a GPU; its runs get none and train on the CPU."""
+
+
+def run_gpus(run: RunSpec, gpus: float) -> float:
+    """GPUs the Ray task of ``run`` requests: ``gpus`` for a trainer in `GPU_TRAINERS`, none otherwise."""
+    return gpus if run.config.trainer in GPU_TRAINERS else 0.0
+
+
+def train_argv(run: RunSpec, config_file: Path, gpus: float = 0.0) -> list[str]:
     """``np_policy.train`` arguments of ``run``, decided from its folder when the task starts (so a retried
     task resumes what an earlier attempt left): ``--resume`` when ``snapshot.pt`` exists, ``--overwrite`` when the
-    folder holds run files but no snapshot (nothing to resume: a start from epoch 0 replaces them)."""
+    folder holds run files but no snapshot (nothing to resume: a start from epoch 0 replaces them); ``--device
+    cuda`` when the task holds a GPU (Ray sets ``CUDA_VISIBLE_DEVICES`` to it)."""
     argv = ["--benchmark", run.config.benchmark, "--seed", str(run.seed), "--config", str(config_file),
             "--out", str(run.run_dir)]
+    if run_gpus(run, gpus) > 0:
+        argv += ["--device", "cuda"]
     if (run.run_dir / "snapshot.pt").exists():
         return [*argv, "--resume"]
     return [*argv, "--overwrite"] if holds_run_files(run.run_dir, run.config.trainer) else argv
@@ -68,14 +83,14 @@ def run_environment(cpus: float) -> dict[str, str]:
     return {**os.environ, "OMP_NUM_THREADS": threads, "NUMBA_NUM_THREADS": threads}
 
 
-def train_run(run: RunSpec, log_path: Path, cpus: float) -> dict[str, Any]:
-    """Train (or resume) one run in a ``python -m np_policy.train`` subprocess on ``cpus`` threads; returns its
-    exit status and the tail of its log. This is the body of the sweep's Ray task."""
+def train_run(run: RunSpec, log_path: Path, cpus: float, gpus: float = 0.0) -> dict[str, Any]:
+    """Train (or resume) one run in a ``python -m np_policy.train`` subprocess on ``cpus`` threads (and the task's
+    GPU when ``gpus``); returns its exit status and the tail of its log. This is the body of the sweep's Ray task."""
     log_path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="sweep-") as tmp:
         config_file = Path(tmp) / f"{run.name}.json"
         config_file.write_text(json.dumps(run.overrides, indent=2))
-        argv = [sys.executable, "-m", run.config.trainer, *train_argv(run, config_file)]
+        argv = [sys.executable, "-m", run.config.trainer, *train_argv(run, config_file, gpus)]
         with log_path.open("ab") as log:
             log.write(("\n$ " + " ".join(argv) + "\n").encode())
             log.flush()
@@ -133,8 +148,9 @@ def run_sweep(todo: list[RunSpec], args) -> list[dict[str, Any]]:
     except ConfigError:
         ray.shutdown()
         raise
-    task = ray.remote(max_retries=1)(train_run).options(num_cpus=cpus, num_gpus=gpus)
-    pending = {task.remote(run, Path(args.log_dir).resolve() / f"{run.name}.log", cpus): run for run in todo}
+    task = ray.remote(max_retries=1)(train_run)
+    pending = {task.options(num_cpus=cpus, num_gpus=run_gpus(run, gpus)).remote(
+        run, Path(args.log_dir).resolve() / f"{run.name}.log", cpus, run_gpus(run, gpus)): run for run in todo}
     print(f"sweep: {len(todo)} run(s) on Ray ({cpus:g} CPU, {gpus:g} GPU per run)", flush=True)
     since = time.time()
     results = []

@@ -173,7 +173,8 @@ def ppo_update(model: nn.Module, optimizer: torch.optim.Optimizer, batch: dict[s
     n = batch["obs"].shape[0]
     model.train()
     for _ in range(config.repeats):
-        for idx in minibatch_indices(n, config.batch_size, generator):
+        for idx in minibatch_indices(n, config.batch_size, generator):  # drawn on the CPU whatever the device
+            idx = idx.to(batch["obs"].device)
             optimizer.zero_grad()
             for key, value in accumulate_minibatch_gradient(model, batch, idx, config).items():
                 stats[key].append(value)

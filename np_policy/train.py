@@ -1,7 +1,7 @@
 """Train the NeuralParker arc policy with PPO (paper §III-E, Algorithm 1, App. A Table V).
 
 ``python -m np_policy.train --benchmark factorial --seed 0 [--config FILE] [--vehicle sedan|van|FILE] [--epochs N]
-[--out DIR] [--resume]``
+[--out DIR] [--resume] [--device cpu|cuda|auto]``
 
 One run reads top to bottom: build the batched env on the training scenes with the geodesic start curriculum
 and the in-loop Hermite ensemble, then per epoch collect 16,384 transitions at a time from the 128 training envs
@@ -17,7 +17,8 @@ finished: its snapshot (optimiser and env state, about three times the size of `
 ``--resume`` on it says it is finished. ``--vehicle`` trains for another vehicle (`np_sim.vehicle`): the env's
 footprint checks, LiDAR footprint ranges, start sampling and action bound κ_max follow it, and the connector's
 curvature bound is its κ_max unless the ``--config`` file sets ``env.connector.kappa_max``; the checkpoint stores
-it, and planners for another vehicle refuse the checkpoint.
+it, and planners for another vehicle refuse the checkpoint. ``--device cuda`` trains the network on a GPU (the
+envs stay on the CPU; what changes is in `np_policy.device`); each metrics row names the device it trained on.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ from tqdm import tqdm
 
 from np_policy.checkpoint import (CheckpointError, check_config, config_differences, load_checkpoint,
                                   load_weights, save_checkpoint, write_atomic)
+from np_policy.device import device_label, restore_sampling_rng, sampling_rng_state, training_device
 from np_policy.config import (BENCHMARKS, PPOConfig, TrainConfig, benchmark_defaults,  # noqa: F401 (re-exported)
                               checkpoint_config, is_scene_path)
 from np_policy.network import ActorCritic, clip_action
@@ -129,9 +131,10 @@ def recorded_clips(skip: int) -> list:
 class Trainer:
     """State of one training run: model, optimiser, envs, statistics, counters."""
 
-    def __init__(self, config: TrainConfig, out: Path):
+    def __init__(self, config: TrainConfig, out: Path, device: torch.device = torch.device("cpu")):
         self.config = config
         self.out = Path(out)
+        self.device = device
         ppo = config.ppo
         use_threads(config.torch_threads)
         torch.manual_seed(config.seed)
@@ -156,7 +159,7 @@ class Trainer:
                                      start_sampler=self.sampler)
         self.select_envs = ParkingVectorEnv(self.scenes, ppo.num_test_envs, env, seed=config.seed + 1,
                                             start_sampler=select_sampler)
-        self.model = ActorCritic(config.env.observation, config.network)
+        self.model = ActorCritic(config.env.observation, config.network).to(device)  # initialised on the CPU
         self.optimizer = make_optimizer(self.model, ppo)
         self.return_rms = RunningMeanStd()
         self.shuffle = torch.Generator().manual_seed(config.seed)
@@ -168,6 +171,10 @@ class Trainer:
         self.sampler.set_progress(0.0, config.curriculum)
         self.obs, _ = self.envs.reset()
         self.episode_return = np.zeros(ppo.num_train_envs)
+
+    def _tensor(self, array: np.ndarray) -> torch.Tensor:
+        """A numpy array of the envs as a tensor on the training device (the same memory on the CPU)."""
+        return torch.from_numpy(array).to(self.device)
 
     # ------------------------------------------------------------------------------------------------ collect
     def collect(self) -> dict[str, Any]:
@@ -188,19 +195,18 @@ class Trainer:
         with torch.no_grad():
             for t in range(T):
                 obs[t] = self.obs
-                a, lp, v = self.model.act(torch.from_numpy(self.obs))
-                actions[t], log_probs[t], values[t] = a.numpy(), lp.numpy(), v.numpy()
+                a, lp, v = self.model.act(self._tensor(self.obs))
+                actions[t], log_probs[t], values[t] = a.cpu().numpy(), lp.cpu().numpy(), v.cpu().numpy()
                 self.obs, r, term, trunc, info = self.envs.step(clip_action(actions[t]))
                 rewards[t], terminated[t], truncated[t] = r, term, trunc
                 self.episode_return += r
                 done = term | trunc
                 if done.any():
-                    final = torch.from_numpy(info["final_obs"][done])
-                    final_values[t, done] = self.model.value(final).numpy()
+                    final_values[t, done] = self.model.value(self._tensor(info["final_obs"][done])).cpu().numpy()
                     ended_returns.extend(self.episode_return[done].tolist())
                     ended_success.extend(info["success"][done].tolist())
                     self.episode_return[done] = 0.0
-            values[T] = self.model.value(torch.from_numpy(self.obs)).numpy()
+            values[T] = self.model.value(self._tensor(self.obs)).cpu().numpy()
         done = terminated | truncated
         next_values = np.where(done, final_values, values[1:])
         self.env_steps += T * N
@@ -214,7 +220,7 @@ class Trainer:
         set_learning_rate(self.optimizer, ppo.lr_at(self.updates))
         advantages, returns = compute_targets(roll["rewards"], roll["values"], roll["next_values"],
                                               roll["terminated"], roll["truncated"], ppo, self.return_rms)
-        flat = lambda a: torch.from_numpy(np.ascontiguousarray(a.reshape(-1, *a.shape[2:])))  # noqa: E731
+        flat = lambda a: self._tensor(np.ascontiguousarray(a.reshape(-1, *a.shape[2:])))  # noqa: E731
         batch = {"obs": flat(roll["obs"]), "actions": flat(roll["actions"]), "log_probs": flat(roll["log_probs"]),
                  "advantages": flat(advantages.astype(np.float32)), "returns": flat(returns.astype(np.float32)),
                  "values": flat(roll["values"])}
@@ -238,7 +244,7 @@ class Trainer:
         self.model.eval()
         with torch.no_grad():
             while (finished < per_env).any():
-                action = clip_action(self.model.mean_action(torch.from_numpy(obs))).numpy()
+                action = clip_action(self.model.mean_action(self._tensor(obs))).cpu().numpy()
                 obs, r, term, trunc, info = env.step(action)
                 counting = finished < per_env
                 running[counting] += r[counting]
@@ -257,7 +263,7 @@ class Trainer:
             "model": self.model.state_dict(), "optimizer": self.optimizer.state_dict(),
             "config": self.config.to_dict(), "return_rms": self.return_rms.state_dict(),
             "epoch": self.epoch, "updates": self.updates, "env_steps": self.env_steps,
-            "best_reward": self.best_reward, "torch_rng": torch.get_rng_state(),
+            "best_reward": self.best_reward, **sampling_rng_state(self.device),
             "shuffle_rng": self.shuffle.get_state(), "obs": self.obs.copy(),
             "episode_return": self.episode_return.copy(),
             "envs": self.envs.state_dict(), "select_envs": self.select_envs.state_dict(),
@@ -275,7 +281,7 @@ class Trainer:
         self.return_rms.load_state_dict(payload["return_rms"])
         self.epoch, self.updates, self.env_steps = payload["epoch"], payload["updates"], payload["env_steps"]
         self.best_reward = payload["best_reward"]
-        torch.set_rng_state(payload["torch_rng"])
+        restore_sampling_rng(payload, self.device)
         self.shuffle.set_state(payload["shuffle_rng"])
         self.obs = payload["obs"].copy()
         self.episode_return = payload["episode_return"].copy()
@@ -394,10 +400,10 @@ def check_epochs(epochs: Any, ppo: PPOConfig) -> int:
 
 def _resume(trainer: Trainer, config: TrainConfig, out: Path, last: int) -> list[dict[str, Any]]:
     """Restore ``trainer`` from ``out/snapshot.pt`` and return the metrics rows up to its epoch; a warning when this
-    process trains on other thread counts than the last row records."""
+    process trains on other thread counts, or on another device, than the last row records."""
     snapshot = out / "snapshot.pt"
     payload = load_checkpoint(snapshot)
-    missing = sorted(set(trainer.state()) - set(payload) - {"init_checkpoint"})
+    missing = sorted(set(trainer.state()) - set(payload) - {"init_checkpoint", "cuda_rng"})
     if missing:
         raise CheckpointError(f"{snapshot}: not a training snapshot, it lacks {missing} (a best.pt holds weights only)")
     # a field added to TrainConfig after the run started is stored without it: compare with its default
@@ -412,6 +418,11 @@ def _resume(trainer: Trainer, config: TrainConfig, out: Path, last: int) -> list
         print(f"warning: {out}: resuming on {now} where the run so far trained on {before}: its curve will differ "
               f"from an uninterrupted run's in the last bits (set OMP_NUM_THREADS and NUMBA_NUM_THREADS to match)",
               file=sys.stderr)
+    device_before = rows[-1].get("device", "cpu") if rows else None  # rows before the field trained on the CPU
+    if device_before is not None and device_before != device_label(trainer.device):
+        print(f"warning: {out}: resuming on {device_label(trainer.device)} where the run so far trained on "
+              f"{device_before}: its curve will differ from an uninterrupted run's (other kernels, another sampling "
+              "stream)", file=sys.stderr)
     return rows
 
 
@@ -442,7 +453,8 @@ def _train_epoch(trainer: Trainer) -> dict[str, Any]:
             "train_return": float(np.mean(returns)) if returns else float("nan"),
             "train_success": float(np.mean(successes)) if successes else float("nan"),
             "episodes": len(returns), "curriculum_fraction": trainer.sampler.fraction,
-            "selection_reward": selection, "selection_success": selection_success, **stats, **thread_counts()}
+            "selection_reward": selection, "selection_success": selection_success, **stats, **thread_counts(),
+            "device": device_label(trainer.device)}
 
 
 def finished_rows(out: Path, config: TrainConfig) -> list[dict[str, Any]] | None:
@@ -462,9 +474,10 @@ def finished_rows(out: Path, config: TrainConfig) -> list[dict[str, Any]] | None
 
 
 def log_scalars(writer: Any, row: dict[str, Any]) -> None:
-    """Every field of a metrics row except ``epoch`` as a TensorBoard scalar of the same name at step ``epoch``."""
+    """Every number of a metrics row except ``epoch`` as a TensorBoard scalar of the same name at step ``epoch``
+    (the ``device`` text is left out)."""
     for key, value in row.items():
-        if key != "epoch":
+        if key != "epoch" and isinstance(value, (int, float)):
             writer.add_scalar(key, value, global_step=row["epoch"])
     writer.flush()
 
@@ -504,8 +517,9 @@ def _write_epoch(trainer: Trainer, out: Path, rows: list[dict[str, Any]], writer
 
 def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resume: bool = False,
           progress: bool = True, init: str | Path | None = None, overwrite: bool = False,
-          tensorboard: bool = True) -> list[dict[str, Any]]:
-    """Run (or resume) training up to ``epochs`` (default: the config's); returns the metrics rows. ``init``
+          tensorboard: bool = True, device: str = "cpu") -> list[dict[str, Any]]:
+    """Run (or resume) training up to ``epochs`` (default: the config's); returns the metrics rows. The network
+    trains on ``device`` (`np_policy.device.training_device`: cpu, cuda, cuda:N or auto). ``init``
     warm-starts a new run from another checkpoint's weights (``Trainer.initialize_from``). A folder that already
     holds a run is refused unless ``resume`` or ``overwrite`` (`prepare_run_folder`); resuming a finished run
     (`finished_rows`) trains nothing and returns its rows. Every file is written atomically; ``tensorboard``
@@ -515,11 +529,12 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
                           "snapshot — give one of them")
     out = Path(out)
     last = check_epochs(epochs, config.ppo)
+    where = training_device(device)
     if resume and not overwrite and (done := finished_rows(out, config)) is not None:
         (out / "snapshot.pt").unlink(missing_ok=True)  # left by a kill between the last row and its removal
         return done
     prepare_run_folder(out, resume, overwrite)
-    trainer = Trainer(config, out)
+    trainer = Trainer(config, out, where)
     rows: list[dict[str, Any]] = []
     if resume:
         rows = _resume(trainer, config, out, last)
@@ -529,7 +544,7 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
         trainer.initialize_from(init)
     write_atomic(out / "config.json", json.dumps(config.to_dict(), indent=2).encode())
     write_metrics(out / "metrics.jsonl", rows)
-    record_start(out, epoch=trainer.epoch, **thread_counts())
+    record_start(out, epoch=trainer.epoch, **thread_counts(), device=device_label(where))
     bar = tqdm(range(trainer.epoch, last), desc="epochs", unit="epoch", disable=not progress,
                initial=trainer.epoch, total=last)
     writer = event_writer(out, rows, trainer.epoch) if tensorboard else None
@@ -599,6 +614,9 @@ def main(argv=None) -> list[dict[str, Any]]:
                         "curves and checkpoints are deleted)")
     parser.add_argument("--init", type=Path, help="start a new run from this checkpoint's weights (same observation "
                         "and network config; e.g. the footprint variant from the reference-point site checkpoint)")
+    parser.add_argument("--device", default="cpu", help="where the network trains: cpu (the default; a resumed run "
+                        "repeats an uninterrupted one bit for bit), cuda, cuda:N, or auto (a CUDA GPU when torch "
+                        "sees one); the envs always run on the CPU (np_policy.device)")
     parser.add_argument("--tensorboard", action=argparse.BooleanOptionalAction, default=True,
                         help="write the metrics as TensorBoard event files beside metrics.jsonl (view them with "
                         "`tensorboard --logdir <out>`)")
@@ -609,7 +627,7 @@ def main(argv=None) -> list[dict[str, Any]]:
         config = TrainConfig.from_dict(data if args.vehicle is None else with_vehicle(data, args.vehicle))
         out = args.out or Path("results/train") / f"{config.benchmark}_seed{config.seed}"
         rows = train(config, out, epochs=args.epochs, resume=args.resume, init=args.init, overwrite=args.overwrite,
-                     tensorboard=args.tensorboard)
+                     tensorboard=args.tensorboard, device=args.device)
     except NPSimError as exc:  # the project's own errors (checkpoint, config, scene) are the user's to fix
         raise _fail(str(exc)) from None
     total = config.ppo.epochs

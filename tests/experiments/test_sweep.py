@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from experiments.sweep import main, run_environment, train_argv
+from experiments.sweep import main, run_environment, run_gpus, train_argv
 from experiments.sweep_plan import PAPER_PLAN, active_trainers, expand, load_plan, resolved_config, run_state
 
 pytestmark = pytest.mark.sweep
@@ -95,6 +95,16 @@ def test_each_state_gets_the_train_flags_that_continue_it(tmp_path):
     assert run_state(run).kind == "started, no snapshot" and flags() == ["--overwrite"]
     (run.run_dir / "snapshot.pt").write_bytes(b"x")
     assert run_state(run).kind == "interrupted" and flags() == ["--resume"]
+
+
+def test_a_neuralparker_task_given_a_gpu_trains_on_it_and_an_adapted_hope_task_gets_none(tmp_path):
+    runs = {r.config.trainer: r for r in expand(PAPER_PLAN, [0], tmp_path, ["main"])}
+    np_run, hope_run = runs["np_policy.train"], runs["hope_policy.train"]
+    assert "--device" not in train_argv(np_run, tmp_path / "c.json")      # no GPU: the trainer's default, the CPU
+    argv = train_argv(np_run, tmp_path / "c.json", gpus=1.0)
+    assert argv[argv.index("--device") + 1] == "cuda"
+    assert run_gpus(np_run, 1.0) == 1.0 and run_gpus(hope_run, 1.0) == 0.0
+    assert "--device" not in train_argv(hope_run, tmp_path / "c.json", gpus=1.0)
 
 
 def test_a_run_trains_on_as_many_torch_and_numba_threads_as_it_has_cpus(monkeypatch):

@@ -363,13 +363,14 @@ def _scalars(run):
 
 
 def _assert_events_equal_metrics(run):
-    """Every metrics.jsonl field but ``epoch`` is one TensorBoard tag holding each epoch once, with the row's value
-    (stored as float32 by TensorBoard)."""
+    """Every metrics.jsonl field but ``epoch`` and the ``device`` text is one TensorBoard tag holding each epoch
+    once, with the row's value (stored as float32 by TensorBoard)."""
     import numpy as np
 
     rows = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines()]
     scalars = _scalars(run)
-    assert set(scalars) == set(rows[0]) - {"epoch"}
+    assert all(r["device"] == "cpu" for r in rows)
+    assert set(scalars) == set(rows[0]) - {"epoch", "device"}
     for tag, points in scalars.items():
         assert [step for step, _ in points] == [r["epoch"] for r in rows], tag
         np.testing.assert_array_equal([value for _, value in points], np.float32([r[tag] for r in rows]), tag)
