@@ -26,21 +26,19 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import first, mean_sd, write_records
+from experiments.common import first, mean_sd
 from experiments.progress import EpisodeProgress, check_out, progress_folder
 from np_policy.config import ACTIONS, PAPER, PRESETS, NeuralParkerConfig
 from np_policy.planner import NeuralParkerPlanner
 from np_sim.benchmarks import frozen_starts, load_benchmark
 from np_sim.cli import cli_boundary, existing_file, non_negative_int, positive_int, vehicle_spec
 from np_sim.config import CONNECTOR_VARIANTS
-from np_sim.provenance import git_state
 from np_sim.validate import plan_valid
 from np_sim.vehicle import VehicleSpec
 
@@ -73,18 +71,11 @@ def evaluate(benchmark: str, checkpoints: list[Path], config: NeuralParkerConfig
     for seed_index, path in enumerate(checkpoints):
         planner = NeuralParkerPlanner.from_checkpoint(path, config, benchmark=benchmark, vehicle=vehicle)
         for k, j in tqdm(episodes, desc=f"{Path(path).name}", unit="ep", disable=not progress):
-            rows = kept.done.get((seed_index, k, j))
-            if rows is None:
-                rows = [episode_row(planner, config, scenes[k], starts[k, j], vehicle,
-                                    {"scene": scenes[k].name, "start_id": j, "checkpoint": str(path),
-                                     "seed_index": seed_index})]
-                kept.add((seed_index, k, j), rows)
-            records += rows
+            records += kept.rows((seed_index, k, j), lambda: [episode_row(
+                planner, config, scenes[k], starts[k, j], vehicle,
+                {"scene": scenes[k].name, "start_id": j, "checkpoint": str(path), "seed_index": seed_index})])
     table = format_table(records, len(checkpoints))
-    write_records(folder, records)
-    (folder / "table.md").write_text(table + "\n")
-    (folder / "config.json").write_text(json.dumps({**settings, **git_state()}, indent=2))
-    kept.finish()
+    kept.write_results(records, table, settings)
     return {"records": records, "table": table, "folder": folder}
 
 

@@ -30,14 +30,13 @@ config.json how many drawn starts were rejected in collision.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from tqdm import tqdm
 
-from experiments.common import first, write_records
+from experiments.common import first
 from experiments.progress import EpisodeProgress, check_out, progress_folder
 from experiments.registry import PlannerOptions, build_planners, check_names, label
 from experiments.scene_files import (add_scene_arguments, describe, episode_scenes, load_scene_files, scene_columns,
@@ -46,7 +45,6 @@ from hope_policy.config import HOPE_ACTIONS
 from np_sim.cli import cli_boundary, non_negative_int, positive_int, vehicle_spec
 from np_sim.collision import path_valid
 from np_sim.planners import HybridAStar
-from np_sim.provenance import git_state
 from np_sim.validate import plan_valid, scoring_rule
 from np_sim.vehicle import VehicleSpec
 
@@ -87,20 +85,13 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
     kept = EpisodeProgress(folder, settings, resume)
     records: list[dict[str, Any]] = []
     for k, j in tqdm(episodes, desc=f"planners/{'scenes' if files else benchmark}", unit="ep", disable=not progress):
-        rows = kept.done.get((k, j))
-        if rows is None:
-            rows = episode_rows(planners, scenes[k], starts[k][j], vehicle, ompl_seed,
-                                {"scene": scenes[k].name, "start_id": j, **scene_columns(files, k, j)})
-            kept.add((k, j), rows)
-        records += rows
+        records += kept.rows((k, j), lambda: episode_rows(
+            planners, scenes[k], starts[k][j], vehicle, ompl_seed,
+            {"scene": scenes[k].name, "start_id": j, **scene_columns(files, k, j)}))
     table = format_table(records, methods)
-    write_records(folder, records)
-    (folder / "table.md").write_text(table + "\n")
-    (folder / "config.json").write_text(json.dumps({
+    kept.write_results(records, table, {
         **settings, "hybrid_astar": {k: v for k, v in vars(planners.get("hybrid_astar", HybridAStar()).config).items()
-                                     if k != "vehicle"},
-        **git_state()}, indent=2, default=str))
-    kept.finish()
+                                     if k != "vehicle"}})
     return {"records": records, "table": table, "folder": folder, "starts": starts_summary(files)}
 
 

@@ -8,7 +8,7 @@ same (a ConfigError names the ones that differ), the episodes already there are 
 line (a kill in the middle of a write) is dropped. NeuralParker and the adapted HOPE seed every random choice per
 episode, so their resumed records equal an uninterrupted run's (searches with a wall-time budget, and OMPL's
 generator seeded once per run, are as repeatable as a fresh run). Once the run writes its records the two files are
-removed.
+removed (`EpisodeProgress.write_results`).
 """
 
 from __future__ import annotations
@@ -16,11 +16,12 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
-from experiments.common import run_folder
+from experiments.common import run_folder, write_records
 from np_sim.cli import folder_problem
 from np_sim.errors import ConfigError
+from np_sim.provenance import git_state
 
 PROGRESS_FILE = "progress.jsonl"
 SETTINGS_FILE = "progress_settings.json"
@@ -83,6 +84,23 @@ class EpisodeProgress:
         self._file.write(json.dumps({"episode": list(episode), "rows": rows}) + "\n")
         self._file.flush()
         self.done[tuple(episode)] = rows
+
+    def rows(self, episode: tuple, plan: Callable[[], list[dict[str, Any]]]) -> list[dict[str, Any]]:
+        """The rows of ``episode``: kept from before the interruption, else ``plan()``'s, recorded as it returns."""
+        kept = self.done.get(tuple(episode))
+        if kept is not None:
+            return kept
+        rows = plan()
+        self.add(episode, rows)
+        return rows
+
+    def write_results(self, records: list[dict[str, Any]], table: str, config: dict[str, Any]) -> None:
+        """The finished run's files — ``records.csv``/``.json``, ``table.md``, and ``config.json`` holding ``config``
+        and the code that made them (`git_state`) — then the progress files are removed."""
+        write_records(self.folder, records)
+        (self.folder / "table.md").write_text(table + "\n")
+        (self.folder / "config.json").write_text(json.dumps({**config, **git_state()}, indent=2, default=str))
+        self.finish()
 
     def finish(self) -> None:
         """The run's records are written: remove the progress files."""
