@@ -2,7 +2,7 @@
 
 ``python -m experiments.evaluate --benchmark factorial --checkpoints a.pt [b.pt c.pt] [--preset paper]
 [--connector fixed|ensemble|centred] [--samples N | --action sample [--action-seed S]] [--vehicle sedan|van|FILE]
-[--out DIR [--resume]]``
+[--split test|validation [--starts-per-scene N]] [--out DIR [--resume]]``
 
 Each checkpoint is one training seed. Every frozen start (1,080 Factorial, 720 Topology-Stress) is planned with
 the checkpoint's environment rules and the NeuralParker preset ``--preset`` (`np_policy.config.PRESETS`; default
@@ -20,6 +20,11 @@ evaluated seed solved — reported as the mean ± sample SD over seeds; plan tim
 one is refused with both named, and the exact footprint validity uses its footprint. Writes ``records.csv`` and
 ``records.json`` (one row per episode), ``table.md`` and ``config.json`` into the run folder; each finished
 episode is kept as the run goes, and ``--resume`` continues a killed run (`experiments.progress`).
+
+``--split validation`` plans the validation starts on the **training** scenes instead
+(`np_sim.benchmarks.validation_starts`: the same protocol, seed 1, ``--starts-per-scene`` per scene, default 10):
+the set on which a choice may be made, and the way to tell a policy that has not learned the benchmark from one
+that has not generalised to its held-out scenes.
 """
 
 from __future__ import annotations
@@ -36,7 +41,8 @@ from experiments.common import first, mean_sd
 from experiments.progress import EpisodeProgress, check_out, progress_folder
 from np_policy.config import ACTIONS, PAPER, PRESETS, NeuralParkerConfig
 from np_policy.planner import NeuralParkerPlanner
-from np_sim.benchmarks import frozen_starts, load_benchmark
+from experiments.scene_files import add_split_arguments
+from np_sim.benchmarks.frozen import VALIDATION_STARTS_PER_SCENE, split_episodes
 from np_sim.cli import cli_boundary, existing_file, non_negative_int, positive_int, vehicle_spec
 from np_sim.config import CONNECTOR_VARIANTS
 from np_sim.validate import plan_valid
@@ -54,17 +60,20 @@ def method_name(config: NeuralParkerConfig) -> str:
 
 def evaluate(benchmark: str, checkpoints: list[Path], config: NeuralParkerConfig = PAPER, out: Path | None = None,
              limit: int | None = None, progress: bool = True, vehicle: VehicleSpec | None = None,
-             resume: bool = False) -> dict[str, Any]:
-    """Plan every frozen start with every checkpoint for ``vehicle`` (default the sedan; a checkpoint trained for
+             resume: bool = False, split: str = "test",
+             starts_per_scene: int = VALIDATION_STARTS_PER_SCENE) -> dict[str, Any]:
+    """Plan every frozen start (``split`` 'validation': the validation starts on the training scenes,
+    ``starts_per_scene`` each) with every checkpoint for ``vehicle`` (default the sedan; a checkpoint trained for
     another is refused), playing each as ``config`` says (the 'paper' preset: the mean action); returns the records
     and the table text. Each finished episode is kept as it goes (`experiments.progress`); ``resume`` continues the
     interrupted run in ``out``."""
     vehicle = VehicleSpec() if vehicle is None else vehicle
-    scenes = load_benchmark(benchmark, "test")
-    starts = frozen_starts(benchmark)
+    scenes, starts = split_episodes(benchmark, split, starts_per_scene, vehicle)
     episodes = first([(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])], limit)
-    settings = {"benchmark": benchmark, "checkpoints": [str(p) for p in checkpoints],
+    settings = {"benchmark": benchmark, "split": split, "checkpoints": [str(p) for p in checkpoints],
                 "neuralparker": config.to_dict(), "vehicle": vehicle.to_dict(), "episodes": len(episodes)}
+    if split == "validation":
+        settings["starts_per_scene"] = starts_per_scene
     folder = progress_folder("evaluate", out, resume)
     kept = EpisodeProgress(folder, settings, resume)
     records: list[dict[str, Any]] = []
@@ -144,13 +153,14 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--resume", action="store_true",
                         help="continue the interrupted run in --out where it stopped (the same other arguments; a "
                              "new or empty --out starts a fresh run)")
+    add_split_arguments(parser)
     parser.add_argument("--limit", type=positive_int, help="only the first N frozen episodes (smoke runs)")
     args = parser.parse_args(argv)
     check_out(parser, args.out, args.resume)
     fields = {"connector": args.connector, "samples": args.samples, "action": args.action, "seed": args.action_seed}
     config = dataclasses.replace(PRESETS[args.preset], **{k: v for k, v in fields.items() if v is not None})
     result = evaluate(args.benchmark, args.checkpoints, config, args.out, args.limit, vehicle=args.vehicle,
-                      resume=args.resume)
+                      resume=args.resume, split=args.split, starts_per_scene=args.starts_per_scene)
     print(result["table"])
     print(f"records: {result['folder'] / 'records.csv'}")
     return result

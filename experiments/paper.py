@@ -12,7 +12,8 @@ epochs (episodes for the adapted HOPE) and it holds its trainer's output (``best
 folder (``eval_<benchmark>/records.csv``: the checkpoint's own connector, `experiments.evaluate`, or the ``hope``
 method of `experiments.planners` for an adapted-HOPE checkpoint; ``eval_<benchmark>_ensemble/``: the ensemble
 connector swapped in at evaluation only; ``eval_<benchmark>_staged/``: the Hybrid A* → NP planner,
-`experiments.planners`). A
+`experiments.planners`; ``eval_<benchmark>_validation/``: the own planner on the validation starts of the training
+scenes, ``--split validation``, for the generalisation table under Fig. 5). A
 finished run without records is evaluated here (``--no-evaluate``: reported as not evaluated; an evaluation
 killed mid-way continues where it stopped, `experiments.progress`); a run that is not
 finished is named with its state ("0 of 3 seeds: not trained yet"), never left out. Success is on the full set,
@@ -43,6 +44,8 @@ from experiments.progress import holds_progress
 from experiments.paper_numbers import (CURRICULUM, GLOBAL_FAMILY, HERMITE, HIGHER_IS_BETTER, MAIN_COMPARISON,
                                        METRIC_NAMES, METRICS, TOPOLOGY_STRESS, TWOSTAGE, PaperTable)
 from experiments.sweep_plan import PAPER_PLAN, TRAINERS, RunSpec, active_trainers, expand, run_state
+from np_sim.benchmarks import load_benchmark
+from np_sim.benchmarks.frozen import VALIDATION_STARTS_PER_SCENE
 from np_sim.cli import cli_boundary
 
 SEEDS = (0, 1, 2)
@@ -58,12 +61,14 @@ class Arm:
     configuration: str
     """`experiments.sweep_plan.Configuration.name` whose runs give the checkpoints."""
     evaluation: str = "own"
-    """'own' (the checkpoint's connector), 'ensemble' (ensemble swapped in at evaluation) or 'staged'."""
+    """'own' (the checkpoint's connector), 'ensemble' (ensemble swapped in at evaluation), 'staged', or
+    'validation' (the own planner on the validation starts of the training scenes)."""
 
 
 HOPE_ACTION = "sampled"
 """How the adapted-HOPE rows play their policy: HOPE's evaluation protocol (`hope_policy.planner`)."""
-EVAL_FOLDERS = {"own": "eval_{benchmark}", "ensemble": "eval_{benchmark}_ensemble", "staged": "eval_{benchmark}_staged"}
+EVAL_FOLDERS = {"own": "eval_{benchmark}", "ensemble": "eval_{benchmark}_ensemble", "staged": "eval_{benchmark}_staged",
+                "validation": "eval_{benchmark}_validation"}
 """The evaluation's records folder inside a run folder."""
 
 ARMS = {
@@ -80,6 +85,8 @@ ARMS = {
 }
 """Our rows of each table (and of the bar figures), labelled as in the paper."""
 GLOBAL_FAMILY_ARMS = ARMS[TOPOLOGY_STRESS.label]
+VALIDATION_ARMS = tuple(Arm(arm.label, arm.configuration, "validation") for arm in GLOBAL_FAMILY_ARMS)
+"""Table III's rows on the validation starts of the training scenes (the generalisation table)."""
 
 
 @dataclass
@@ -128,7 +135,7 @@ def read_records(path: Path) -> list[dict]:
 def evaluation_missing(arm: Arm, run: RunSpec) -> str:
     """Why ``arm`` cannot be evaluated on ``run``'s checkpoint (empty when it can): an adapted-HOPE checkpoint has
     no ensemble-swapped evaluation."""
-    if run.config.trainer == "hope_policy.train" and arm.evaluation not in ("own", "staged"):
+    if run.config.trainer == "hope_policy.train" and arm.evaluation not in ("own", "staged", "validation"):
         return f"trained; the {arm.evaluation} evaluation of an adapted-HOPE checkpoint is not built yet"
     return ""
 
@@ -150,15 +157,16 @@ def stale_protocol(run: RunSpec, folder: Path) -> str:
 def evaluation_argv(arm: Arm, run: RunSpec, folder: Path) -> list[str]:
     """The experiment CLI that writes ``folder``'s records for ``run``'s output checkpoint (`RunSpec.output`)."""
     checkpoint, benchmark = str(run.output), run.config.benchmark
+    split = ["--split", "validation"] if arm.evaluation == "validation" else []
     if run.config.trainer == "hope_policy.train":
         method = "staged_astar_hope" if arm.evaluation == "staged" else "hope"
         return [sys.executable, "-m", "experiments.planners", "--benchmark", benchmark, "--methods", method,
-                "--hope-checkpoint", checkpoint, "--hope-action", HOPE_ACTION, "--out", str(folder)]
+                "--hope-checkpoint", checkpoint, "--hope-action", HOPE_ACTION, "--out", str(folder), *split]
     if arm.evaluation == "staged":
         return [sys.executable, "-m", "experiments.planners", "--benchmark", benchmark, "--checkpoint", checkpoint,
                 "--methods", "staged_astar_np", "--out", str(folder)]
     argv = [sys.executable, "-m", "experiments.evaluate", "--benchmark", benchmark, "--checkpoints", checkpoint,
-            "--out", str(folder)]
+            "--out", str(folder), *split]
     return argv + (["--connector", "ensemble"] if arm.evaluation == "ensemble" else [])
 
 
@@ -413,6 +421,30 @@ def family_lines(groups: dict[str, dict[str, list[float]]]) -> list[str]:
     return lines + [""]
 
 
+def success_values(result: ArmResult, seeds) -> list[float]:
+    """``result``'s success rate at each of ``seeds``."""
+    return [float(np.mean([row["success"] for row in result.records[s]])) for s in seeds]
+
+
+def generalisation_lines(test: list[ArmResult], validation: list[ArmResult]) -> list[str]:
+    """Table III's rows on the frozen test starts beside the validation starts of the training scenes (mean ± sample
+    SD over the seeds measured on both) and the gap: a policy that has learned its training scenes but does not carry
+    them over to the held-out ones shows a large gap."""
+    lines = ["| Row | Seeds | Succ. test scenes | Succ. training scenes (validation starts) | test − training |",
+             "|---|---|---|---|---|"]
+    for t, v in zip(test, validation):
+        seeds = sorted(set(t.records) & set(v.records))
+        if not seeds:
+            continue
+        ours, theirs = success_values(t, seeds), success_values(v, seeds)
+        lines.append(f"| {t.arm.label} | {', '.join(map(str, seeds))} | {fmt(ours, 3)} | {fmt(theirs, 3)} | "
+                     f"{fmt([a - b for a, b in zip(ours, theirs)], 3)} |")
+    if len(lines) == 2:
+        return ["No row has a seed measured on both sets yet (" + "; ".join(
+            f"{v.arm.label}: {v.seeds_text()}" for v in validation) + ").", ""]
+    return lines + [""]
+
+
 def claim_lines(table_label: str, stats, results: list[ArmResult]) -> list[str]:
     """The verdict line of every claim made on ``table_label``."""
     seeds = {r.arm.label: r.seeds_text() for r in results}
@@ -536,9 +568,15 @@ def status_lines(results: dict[str, list[ArmResult]]) -> list[str]:
     return lines
 
 
+def validation_episodes(benchmark: str) -> int:
+    """Episodes per seed of a validation evaluation: the training scenes × `VALIDATION_STARTS_PER_SCENE`."""
+    return len(load_benchmark(benchmark, "train")) * VALIDATION_STARTS_PER_SCENE
+
+
 def build_report(runs_root: Path, out_md: Path, evaluate: bool = True) -> str:
     """Measure every arm, run the case figures and write the report to ``out_md`` (figures beside it)."""
     runs = {(r.config.name, r.seed): r for r in expand(PAPER_PLAN, SEEDS, runs_root)}
+    active = active_trainers()
     figures = out_md.parent / "figures"
     figures.mkdir(parents=True, exist_ok=True)
     results = measure_all(runs, evaluate)
@@ -582,6 +620,15 @@ def build_report(runs_root: Path, out_md: Path, evaluate: bool = True) -> str:
                          + ("Ours:" if any(r.records for r in topo) else "Not measurable yet: no Topology-Stress row "
                             "has a seed (" + "; ".join(f"{r.arm.label}: {r.seeds_text()}" for r in topo) + ")."))
     lines += family_lines(family_success(topo))
+    lines += ["## Beyond the paper: test scenes against training scenes on Topology-Stress", "",
+              f"Each Table III row's success on the 720 frozen test starts beside its success on "
+              f"{validation_episodes('topology')} validation starts on the 48 training scenes "
+              f"(`np_sim.benchmarks.validation_starts`: the frozen-start protocol with seed 1, "
+              f"{VALIDATION_STARTS_PER_SCENE} per scene; `python -m experiments.evaluate --split validation`, "
+              "`python -m experiments.planners --split validation`). The test scenes are structurally disjoint from "
+              "the training scenes; the paper reports only the test side.", "",
+              *generalisation_lines(topo, [measure(arm, runs, validation_episodes("topology"), evaluate, active)
+                                           for arm in VALIDATION_ARMS])]
     lines += table_section(HERMITE, results[HERMITE.label], runs) + cases["fig:hermite-case"]
     lines += table_section(CURRICULUM, results[CURRICULUM.label], runs)
     text = "\n".join(lines).rstrip() + "\n"

@@ -3,7 +3,7 @@
 
 ``python -m experiments.planners --benchmark factorial|topology [--checkpoint PATH] [--methods ...]
 [--convention reference_point|footprint] [--vehicle sedan|van|FILE] [--limit N] [--out DIR [--resume]]
-[--scenes FILE... [--starts N] [--seed S]]``
+[--scenes FILE... [--starts N] [--seed S] | --split validation [--starts-per-scene N]]``
 
 Methods: Hybrid A*, NP-Guided A* (Hybrid A* guided by one NeuralParker rollout), the OMPL peer (RRT* in a
 Reeds–Shepp space, same time budget as Hybrid A*), NeuralParker (the checkpoint's deterministic policy) and the
@@ -39,9 +39,10 @@ from tqdm import tqdm
 from experiments.common import first
 from experiments.progress import EpisodeProgress, check_out, progress_folder
 from experiments.registry import PlannerOptions, build_planners, check_names, label
-from experiments.scene_files import (add_scene_arguments, describe, episode_scenes, load_scene_files, scene_columns,
-                                     starts_summary, strictest)
+from experiments.scene_files import (add_scene_arguments, add_split_arguments, describe, episode_scenes,
+                                     load_scene_files, scene_columns, starts_summary, strictest)
 from hope_policy.config import HOPE_ACTIONS
+from np_sim.benchmarks.frozen import VALIDATION_STARTS_PER_SCENE
 from np_sim.cli import cli_boundary, non_negative_int, positive_int, vehicle_spec
 from np_sim.collision import path_valid
 from np_sim.planners import HybridAStar
@@ -60,10 +61,12 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
         convention: str = "reference_point", out: Path | None = None, limit: int | None = None, ompl_seed: int = 0,
         progress: bool = True, hope_checkpoint: Path | None = None, hope_action: str = "sampled", hope_seed: int = 0,
         vehicle: VehicleSpec | None = None, scenes: list[Path] | None = None, n_starts: int | None = None,
-        seed: int = 0, resume: bool = False) -> dict[str, Any]:
+        seed: int = 0, resume: bool = False, split: str = "test",
+        starts_per_scene: int = VALIDATION_STARTS_PER_SCENE) -> dict[str, Any]:
     """Plan every frozen start with every method for ``vehicle`` (default the sedan); returns the records, the
     table text and the run folder. With ``scenes`` (files), their starts instead (`experiments.scene_files`:
-    the files' own, or ``n_starts`` drawn with ``seed``). Each finished episode is kept in the folder as it goes
+    the files' own, or ``n_starts`` drawn with ``seed``); with ``split`` 'validation', ``starts_per_scene`` seeded
+    starts on each training scene (`np_sim.benchmarks.validation_starts`). Each finished episode is kept in the folder as it goes
     (`experiments.progress`); ``resume`` continues the interrupted run in ``out``."""
     methods = check_names(DEFAULT_METHODS if methods is None else methods, METHODS)
     vehicle = VehicleSpec() if vehicle is None else vehicle
@@ -73,9 +76,10 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
     planners = build_planners(methods, options)
     files = (load_scene_files(scenes, n_starts, seed, strictest(p.convention for p in planners.values()), vehicle)
              if scenes else None)
-    scenes, starts = episode_scenes(benchmark, files)
+    scenes, starts = episode_scenes(benchmark, files, split, starts_per_scene, vehicle)
     episodes = first([(k, j) for k in range(len(scenes)) for j in range(len(starts[k]))], limit)
     settings = {"benchmark": None if files else benchmark, "scenes": describe(files), "starts_seed": seed,
+                **({} if files or split == "test" else {"split": split, "starts_per_scene": starts_per_scene}),
                 "methods": methods, "checkpoint": None if checkpoint is None else str(checkpoint),
                 "convention": convention, "vehicle": vehicle.to_dict(), "episodes": len(episodes),
                 "ompl_seed": ompl_seed, "neuralparker": options.neuralparker.to_dict(),
@@ -188,12 +192,16 @@ def main(argv=None) -> dict[str, Any]:
                              "new or empty --out starts a fresh run)")
     parser.add_argument("--limit", type=positive_int, help="only the first N frozen episodes (smoke runs)")
     add_scene_arguments(parser)
+    add_split_arguments(parser)
     args = parser.parse_args(argv)
+    if args.scenes and args.split != "test":
+        parser.error("--split validation plans the benchmark's training scenes; it cannot go with --scenes")
     check_out(parser, args.out, args.resume)
     result = run(args.benchmark, args.methods, args.checkpoint, args.convention, args.out, args.limit, args.ompl_seed,
                  hope_checkpoint=args.hope_checkpoint, hope_action=args.hope_action, hope_seed=args.hope_seed,
                  vehicle=args.vehicle, scenes=args.scenes,
-                 n_starts=args.starts, seed=args.seed, resume=args.resume)
+                 n_starts=args.starts, seed=args.seed, resume=args.resume, split=args.split,
+                 starts_per_scene=args.starts_per_scene)
     if result["starts"]:
         print(result["starts"])
     print(result["table"])

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from np_sim.benchmarks import frozen_starts, load_benchmark
+from np_sim.benchmarks.frozen import VALIDATION_STARTS_PER_SCENE, split_episodes
 import np_sim.examples
 from np_sim.cli import non_negative_int, positive_int
 from np_sim.config import Convention
@@ -70,12 +70,26 @@ def load_scene_files(paths: Iterable[Path], n_starts: int | None = None, seed: i
     return files
 
 
-def episode_scenes(benchmark: str, files: list[SceneFile] | None) -> tuple[list[Scene], list[np.ndarray]]:
-    """(scenes, per-scene (n, 3) starts): the scene files' when given, else the benchmark's test scenes and frozen
-    starts."""
+def episode_scenes(benchmark: str, files: list[SceneFile] | None, split: str = "test",
+                   starts_per_scene: int = VALIDATION_STARTS_PER_SCENE,
+                   vehicle: VehicleSpec | None = None) -> tuple[list[Scene], list[np.ndarray]]:
+    """(scenes, per-scene (n, 3) starts): the scene files' when given, else the benchmark's ``split``
+    (`np_sim.benchmarks.frozen.split_episodes`: the test scenes and frozen starts, or the validation starts on the
+    training scenes)."""
     if files:
         return [f.scene for f in files], [f.starts.poses for f in files]
-    return load_benchmark(benchmark, "test"), list(frozen_starts(benchmark))
+    scenes, starts = split_episodes(benchmark, split, starts_per_scene, vehicle)
+    return scenes, list(starts)
+
+
+def add_split_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--split test|validation`` and ``--starts-per-scene N`` (`np_sim.benchmarks.frozen.split_episodes`)."""
+    parser.add_argument("--split", choices=["test", "validation"], default="test",
+                        help="test: the frozen test starts (default); validation: seeded starts on the training "
+                             "scenes (np_sim.benchmarks.validation_starts), where choices may be made")
+    parser.add_argument("--starts-per-scene", type=positive_int, default=VALIDATION_STARTS_PER_SCENE, metavar="N",
+                        help=f"validation starts per training scene (--split validation; default "
+                             f"{VALIDATION_STARTS_PER_SCENE})")
 
 
 def scene_columns(files: list[SceneFile] | None, k: int, j: int) -> dict[str, Any]:

@@ -55,6 +55,10 @@ STARTS_PER_SCENE = 40
 """Frozen starts per test scene."""
 SAMPLING_SEED = 0
 """Seed of the frozen-start generator (independent of every training seed)."""
+VALIDATION_SEED = 1
+"""Seed of the validation starts on the training scenes (`validation_starts`)."""
+VALIDATION_STARTS_PER_SCENE = 10
+"""Validation starts per training scene by default."""
 DATA_DIR = Path(__file__).resolve().parent / "data"
 """Where the shipped benchmark files live."""
 
@@ -290,6 +294,30 @@ def load_benchmark(name: str, split: str, data_dir: str | Path | None = None) ->
     if split not in SPLITS:
         raise ConfigError(f"load_benchmark: unknown split {split!r}; expected one of {', '.join(map(repr, SPLITS))}")
     return list(read_benchmark_file(name, data_dir)[1][split])
+
+
+def validation_starts(name: str, per_scene: int = VALIDATION_STARTS_PER_SCENE, seed: int = VALIDATION_SEED,
+                      vehicle: VehicleSpec | None = None) -> np.ndarray:
+    """(n_train_scenes, per_scene, 3) starts on the **training** scenes of benchmark ``name``, row k for training
+    scene k of `load_benchmark(name, "train")`, drawn by the frozen-start protocol (`draw_frozen_starts`) with its
+    own seed: the validation set on which a recipe, threshold or checkpoint may be chosen, since the frozen test
+    starts may not be looked at for that (paper §III evaluation protocol; the training itself samples its own
+    starts). Deterministic for a given seed; about a second per scene to build the geodesic grids."""
+    _check_name(name, "validation_starts")
+    if per_scene < 1:
+        raise ConfigError(f"validation_starts: per_scene must be a positive integer, got {per_scene!r}")
+    return draw_frozen_starts(load_benchmark(name, "train"), n=per_scene, seed=seed, vehicle=vehicle)
+
+
+def split_episodes(name: str, split: str = "test", per_scene: int = VALIDATION_STARTS_PER_SCENE,
+                   vehicle: VehicleSpec | None = None) -> tuple[list[Scene], np.ndarray]:
+    """(scenes, (n_scenes, n, 3) starts) of benchmark ``name``: ``split`` 'test' gives the test scenes and their
+    frozen starts, 'validation' the training scenes and their `validation_starts` (``per_scene`` each)."""
+    if split == "test":
+        return load_benchmark(name, "test"), frozen_starts(name)
+    if split == "validation":
+        return load_benchmark(name, "train"), validation_starts(name, per_scene, vehicle=vehicle)
+    raise ConfigError(f"split_episodes: unknown split {split!r}; expected 'test' or 'validation'")
 
 
 def frozen_starts(name: str, data_dir: str | Path | None = None) -> np.ndarray:

@@ -15,7 +15,7 @@ from shapely.geometry import Point
 from cli_helpers import one_error_line
 from experiments import hermite_case, overview_case, paper, scenes
 from experiments.paper import (ARMS, CLAIMS, Arm, ArmResult, Claim, claim_verdict, compare, epoch_hours,
-                               evaluation_argv, measure, summarise)
+                               evaluation_argv, generalisation_lines, measure, summarise)
 from experiments.paper_numbers import METRICS, TABLES
 from experiments.sweep_plan import PAPER_PLAN, expand
 from np_sim.benchmarks import load_benchmark
@@ -97,6 +97,19 @@ def test_summarise_uses_full_set_success_and_the_within_seed_common_cohort():
     assert stats["A"]["success"] == pytest.approx([2 / 3, 1.0])
     assert stats["A"]["L"] == pytest.approx([10.0, 16.0])
     assert stats["B"]["L"] == pytest.approx([12.0, 18.0])
+
+
+def test_generalisation_table_sets_test_success_beside_the_training_scenes_on_shared_seeds():
+    nan = float("nan")
+    test = [ArmResult(Arm("A", "x"), {0: _rows([(1, 1.0), (0, nan)]), 1: _rows([(1, 1.0), (1, 1.0)])}),
+            ArmResult(Arm("B", "y"), {0: _rows([(1, 1.0), (1, 1.0)])})]
+    validation = [ArmResult(Arm("A", "x", "validation"), {0: _rows([(1, 1.0)] * 4), 1: _rows([(1, 1.0), (0, nan)])}),
+                  ArmResult(Arm("B", "y", "validation"), missing={0: "trained, not evaluated yet"})]
+    lines = generalisation_lines(test, validation)
+    # A: test 0.5 and 1.0 (mean 0.75, SD 0.354), training scenes 1.0 and 0.5, gaps -0.5 and +0.5; B: no shared seed
+    assert lines[2] == "| A | 0, 1 | 0.750 ± 0.354 | 0.750 ± 0.354 | 0.000 ± 0.707 |"
+    assert len(lines) == 4 and lines[3] == ""
+    assert generalisation_lines(test[1:], validation[1:])[0].startswith("No row has a seed measured on both sets yet")
 
 
 def _metrics(folder: Path, epochs: int, seconds: float, timed_from: int | None = None) -> None:
@@ -183,6 +196,12 @@ def test_a_finished_adapted_hope_run_is_read_from_final_pt_and_its_planner_recor
                         "--hope-checkpoint", str(seed0 / "final.pt"), "--hope-action", "sampled", "--out",
                         str(seed0 / "eval_factorial")]
     assert epoch_hours(seed0 / "metrics.jsonl") == pytest.approx(3 * 60.0 / 3600)
+    argv = evaluation_argv(Arm("Adapted HOPE", "factorial_hope", "validation"), runs[("factorial_hope", 0)],
+                           seed0 / "eval_factorial_validation")
+    assert argv[-2:] == ["--split", "validation"] and argv[argv.index("--methods") + 1] == "hope"
+    argv = evaluation_argv(Arm("Fixed Hermite", "factorial_np_fixed", "validation"),
+                           runs[("factorial_np_fixed", 0)], tmp_path / "v")
+    assert argv[2] == "experiments.evaluate" and argv[-2:] == ["--split", "validation"]
 
 
 def test_scene_examples_grid_and_png(tmp_path):

@@ -11,6 +11,7 @@ import pytest
 from experiments import evaluate, planners
 from experiments.planners import DEFAULT_CHECKPOINT, main
 from experiments.progress import PROGRESS_FILE, SETTINGS_FILE
+from np_policy.planner import NeuralParkerPlanner
 from np_sim.errors import ConfigError
 
 pytestmark = pytest.mark.skipif(not DEFAULT_CHECKPOINT.exists(), reason="no shipped NeuralParker checkpoint")
@@ -101,3 +102,19 @@ def test_a_killed_evaluation_resumes_and_writes_the_uninterrupted_records(tmp_pa
     assert len(calls) == 2 and _untimed(resumed["records"]) == _untimed(straight["records"])
     assert evaluate.main(["--checkpoints", str(DEFAULT_CHECKPOINT), "--limit", "1", "--out", str(tmp_path / "cli"),
                           "--resume"])["records"]  # --resume on a new folder is a fresh run
+
+
+def test_the_validation_split_plans_seeded_starts_on_the_training_scenes(tmp_path):
+    from np_sim.benchmarks import load_benchmark, validation_starts
+
+    result = evaluate.main(["--checkpoints", str(DEFAULT_CHECKPOINT), "--split", "validation",
+                            "--starts-per-scene", "2", "--limit", "3", "--out", str(tmp_path / "val")])
+    train = load_benchmark("factorial", "train")
+    assert [(r["scene"], r["start_id"]) for r in result["records"]] == [
+        (train[0].name, 0), (train[0].name, 1), (train[1].name, 0)]
+    config = json.loads((tmp_path / "val" / "config.json").read_text())
+    assert config["split"] == "validation" and config["starts_per_scene"] == 2
+    planner = NeuralParkerPlanner.from_checkpoint(DEFAULT_CHECKPOINT, benchmark="factorial")
+    plan = planner.plan(train[1], validation_starts("factorial", per_scene=2)[1, 0])
+    assert result["records"][2]["success"] == int(plan.success)
+    assert result["records"][2]["L"] == pytest.approx(plan.metrics()[0], nan_ok=True)

@@ -5,7 +5,7 @@ import pytest
 from shapely.geometry import Point
 from shapely.geometry import Polygon as ShapelyPolygon
 
-from np_sim.benchmarks import BENCHMARK_NAMES, frozen_starts, load_benchmark
+from np_sim.benchmarks import BENCHMARK_NAMES, frozen_starts, load_benchmark, validation_starts
 from np_sim.benchmarks import __main__ as bench_cli
 from np_sim.benchmarks import generate as generate_cli
 from np_sim.benchmarks.frozen import (
@@ -46,6 +46,24 @@ def test_frozen_starts_follow_the_seed_0_protocol():
     scenes = load_benchmark("topology", "test")
     np.testing.assert_array_equal(draw_frozen_starts(scenes, seed=0), frozen_starts("topology"))
     assert not np.array_equal(draw_frozen_starts(scenes[:2], seed=1), frozen_starts("topology")[:2])
+
+
+def test_validation_starts_lie_on_the_training_scenes_seeded_apart_from_the_frozen_ones():
+    train = load_benchmark("topology", "train")
+    starts = validation_starts("topology", per_scene=3)
+    assert starts.shape == (len(train), 3, 3)
+    np.testing.assert_array_equal(starts, validation_starts("topology", per_scene=3))  # deterministic
+    np.testing.assert_array_equal(starts, draw_frozen_starts(train, n=3, seed=1))
+    for scene, poses in zip(train, starts):
+        region = ShapelyPolygon(scene.start_region)
+        assert all(region.contains(Point(p[:2])) for p in poses)
+        assert path_valid(scene, poses, convention="footprint")
+        assert np.all(np.isfinite(geodesic_grid(scene).distance_at(poses[:, :2])))
+    assert not np.array_equal(validation_starts("topology", per_scene=3, seed=2), starts)
+    with pytest.raises(ConfigError, match="per_scene must be a positive integer, got 0"):
+        validation_starts("topology", per_scene=0)
+    with pytest.raises(ConfigError, match="unknown benchmark"):
+        validation_starts("tpcap")
 
 
 def test_unknown_names_are_config_errors_listing_the_valid_ones(tmp_path):
