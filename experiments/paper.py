@@ -624,8 +624,9 @@ def build_report(runs_root: Path, out_md: Path, evaluate: bool = True) -> str:
               f"Each Table III row's success on the 720 frozen test starts beside its success on "
               f"{validation_episodes('topology')} validation starts on the 48 training scenes "
               f"(`np_sim.benchmarks.validation_starts`: the frozen-start protocol with seed 1, "
-              f"{VALIDATION_STARTS_PER_SCENE} per scene; `python -m experiments.evaluate --split validation`, "
-              "`python -m experiments.planners --split validation`). The test scenes are structurally disjoint from "
+              f"{VALIDATION_STARTS_PER_SCENE} per scene; `python -m experiments.evaluate --split validation --checkpoints "
+              "PATH`, and for the HOPE-style rows `python -m experiments.planners --split validation --methods hope "
+              "--hope-checkpoint PATH`). The test scenes are structurally disjoint from "
               "the training scenes; the paper reports only the test side.", "",
               *generalisation_lines(topo, [measure(arm, runs, validation_episodes("topology"), evaluate, active)
                                            for arm in VALIDATION_ARMS])]
