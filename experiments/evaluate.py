@@ -2,7 +2,7 @@
 
 ``python -m experiments.evaluate --benchmark factorial --checkpoints a.pt [b.pt c.pt] [--preset paper]
 [--connector fixed|ensemble|centred] [--samples N | --action sample [--action-seed S]] [--vehicle sedan|van|FILE]
-[--split test|validation [--starts-per-scene N]] [--out DIR [--resume]]``
+[--split test|validation|holdout [--starts-per-scene N]] [--out DIR [--resume]]``
 
 Each checkpoint is one training seed. Every frozen start (1,080 Factorial, 720 Topology-Stress) is planned with
 the checkpoint's environment rules and the NeuralParker preset ``--preset`` (`np_policy.config.PRESETS`; default
@@ -24,7 +24,9 @@ episode is kept as the run goes, and ``--resume`` continues a killed run (`exper
 ``--split validation`` plans the validation starts on the **training** scenes instead
 (`np_sim.benchmarks.validation_starts`: the same protocol, seed 1, ``--starts-per-scene`` per scene, default 10):
 the set on which a choice may be made, and the way to tell a policy that has not learned the benchmark from one
-that has not generalised to its held-out scenes.
+that has not generalised to its held-out scenes. ``--split holdout`` plans the same starts on only the training
+scenes the checkpoints left out (``TrainConfig.holdout_every``, the same in every checkpoint): scenes the policy
+never saw, for choosing how a recipe generalises without the test scenes.
 """
 
 from __future__ import annotations
@@ -39,12 +41,13 @@ from tqdm import tqdm
 
 from experiments.common import first, mean_sd
 from experiments.progress import EpisodeProgress, check_out, progress_folder
-from np_policy.config import ACTIONS, PAPER, PRESETS, NeuralParkerConfig
-from np_policy.planner import NeuralParkerPlanner
 from experiments.scene_files import add_split_arguments
+from np_policy.config import ACTIONS, PAPER, PRESETS, NeuralParkerConfig
+from np_policy.planner import NeuralParkerPlanner, Policy
 from np_sim.benchmarks.frozen import VALIDATION_STARTS_PER_SCENE, split_episodes
 from np_sim.cli import cli_boundary, existing_file, non_negative_int, positive_int, vehicle_spec
 from np_sim.config import CONNECTOR_VARIANTS
+from np_sim.errors import ConfigError
 from np_sim.validate import plan_valid
 from np_sim.vehicle import VehicleSpec
 
@@ -68,12 +71,15 @@ def evaluate(benchmark: str, checkpoints: list[Path], config: NeuralParkerConfig
     and the table text. Each finished episode is kept as it goes (`experiments.progress`); ``resume`` continues the
     interrupted run in ``out``."""
     vehicle = VehicleSpec() if vehicle is None else vehicle
-    scenes, starts = split_episodes(benchmark, split, starts_per_scene, vehicle)
+    holdout_every = shared_holdout(checkpoints, benchmark) if split == "holdout" else 0
+    scenes, starts = split_episodes(benchmark, split, starts_per_scene, vehicle, holdout_every)
     episodes = first([(k, j) for k in range(len(scenes)) for j in range(starts.shape[1])], limit)
     settings = {"benchmark": benchmark, "split": split, "checkpoints": [str(p) for p in checkpoints],
                 "neuralparker": config.to_dict(), "vehicle": vehicle.to_dict(), "episodes": len(episodes)}
-    if split == "validation":
+    if split != "test":
         settings["starts_per_scene"] = starts_per_scene
+    if holdout_every:
+        settings["holdout_every"] = holdout_every
     folder = progress_folder("evaluate", out, resume)
     kept = EpisodeProgress(folder, settings, resume)
     records: list[dict[str, Any]] = []
@@ -86,6 +92,16 @@ def evaluate(benchmark: str, checkpoints: list[Path], config: NeuralParkerConfig
     table = format_table(records, len(checkpoints))
     kept.write_results(records, table, settings)
     return {"records": records, "table": table, "folder": folder}
+
+
+def shared_holdout(checkpoints: list[Path], benchmark: str) -> int:
+    """The ``TrainConfig.holdout_every`` every checkpoint was trained with (ConfigError naming them when they differ
+    or when none left scenes out)."""
+    values = {str(path): Policy.load(path, benchmark).train.holdout_every for path in checkpoints}
+    if len(set(values.values())) != 1 or not next(iter(values.values())):
+        raise ConfigError("--split holdout: the checkpoints must all have been trained with the same "
+                          f"TrainConfig.holdout_every >= 2, got {values}")
+    return next(iter(values.values()))
 
 
 def episode_row(planner: NeuralParkerPlanner, config: NeuralParkerConfig, scene, start, vehicle: VehicleSpec,
@@ -153,7 +169,7 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--resume", action="store_true",
                         help="continue the interrupted run in --out where it stopped (the same other arguments; a "
                              "new or empty --out starts a fresh run)")
-    add_split_arguments(parser)
+    add_split_arguments(parser, ("test", "validation", "holdout"))
     parser.add_argument("--limit", type=positive_int, help="only the first N frozen episodes (smoke runs)")
     args = parser.parse_args(argv)
     check_out(parser, args.out, args.resume)

@@ -475,7 +475,8 @@ NOTES = {
                     "sums prefix and downstream and leaves out the single hand-off jump, as the caption says. Records: "
                     "`python -m experiments.planners --methods staged_astar_np --checkpoint RUN/best.pt`.",
     TOPOLOGY_STRESS.label: "All six rows use the fixed connector and the geodesic curriculum "
-                           "([sweep.md](sweep.md)).",
+                           "([sweep.md](sweep.md)). How each row does on its own training scenes, against these "
+                           "held-out ones: the table after Fig. 5.",
     HERMITE.label: "Fixed Hermite and Ensemble, eval. only are the same fixed-connector checkpoints, evaluated with "
                    "their own connector and with the ensemble swapped in "
                    "(`python -m experiments.evaluate --checkpoints a.pt [b.pt c.pt] --connector ensemble`, one file "

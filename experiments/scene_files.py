@@ -82,13 +82,19 @@ def episode_scenes(benchmark: str, files: list[SceneFile] | None, split: str = "
     return scenes, list(starts)
 
 
-def add_split_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--split test|validation`` and ``--starts-per-scene N`` (`np_sim.benchmarks.frozen.split_episodes`)."""
-    parser.add_argument("--split", choices=["test", "validation"], default="test",
-                        help="test: the frozen test starts (default); validation: seeded starts on the training "
-                             "scenes (np_sim.benchmarks.validation_starts), where choices may be made")
+SPLIT_HELP = {"test": "the frozen test starts (default)",
+              "validation": "seeded starts on the training scenes (np_sim.benchmarks.validation_starts), where "
+                            "choices may be made",
+              "holdout": "the same starts on only the training scenes the checkpoints were trained without "
+                         "(TrainConfig.holdout_every)"}
+
+
+def add_split_arguments(parser: argparse.ArgumentParser, splits: tuple[str, ...] = ("test", "validation")) -> None:
+    """``--split`` (one of ``splits``) and ``--starts-per-scene N`` (`np_sim.benchmarks.frozen.split_episodes`)."""
+    parser.add_argument("--split", choices=splits, default="test",
+                        help="; ".join(f"{name}: {SPLIT_HELP[name]}" for name in splits))
     parser.add_argument("--starts-per-scene", type=positive_int, default=VALIDATION_STARTS_PER_SCENE, metavar="N",
-                        help=f"validation starts per training scene (--split validation; default "
+                        help=f"validation starts per training scene (--split validation or holdout; default "
                              f"{VALIDATION_STARTS_PER_SCENE})")
 
 

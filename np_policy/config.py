@@ -274,6 +274,11 @@ class TrainConfig:
     this much on every side (`VehicleSpec.inflated`), so an episode ends when the body comes closer than this to an
     obstacle or the boundary, and the policy learns to keep that clearance. The checkpoint keeps the real vehicle:
     planners roll it out against the real body. Meaningful under the footprint convention; 0 is the paper's."""
+    holdout_every: int = 0
+    """Beyond the paper (Factorial and Topology-Stress only): leave every this-many-th training scene out of training
+    and selection (`np_sim.benchmarks.frozen.held_out`: with 4, two scenes per Topology-Stress cell, 12 of 48), so
+    ``python -m experiments.evaluate --split holdout`` can measure how a recipe carries over to scenes it never saw
+    without looking at the test scenes; 0 (the paper's) trains on all of them."""
     env: EnvConfig = field(default_factory=EnvConfig)
     ppo: PPOConfig = field(default_factory=PPOConfig)
     network: NetworkConfig = field(default_factory=NetworkConfig)
@@ -295,6 +300,9 @@ class TrainConfig:
         if self.train_margin_m and self.env.collision != "footprint":
             raise ConfigError("TrainConfig.train_margin_m: a clearance margin needs env.collision 'footprint' (the "
                               f"reference-point convention has no body to grow), got {self.env.collision!r}")
+        if self.holdout_every and (self.holdout_every < 2 or self.benchmark not in ("factorial", "topology")):
+            raise ConfigError("TrainConfig.holdout_every: expected 0 or an integer >= 2 on the 'factorial' or "
+                              f"'topology' benchmark, got {self.holdout_every!r} on {self.benchmark!r}")
         if self.site_recorded_skip < 0:
             raise ConfigError(f"TrainConfig.site_recorded_skip: expected >= 0 clips, got {self.site_recorded_skip!r}")
         if self.site_recorded_share and self.benchmark != "site":

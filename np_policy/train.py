@@ -93,8 +93,9 @@ class PairedStartSampler:
             raise CheckpointError(f"PairedStartSampler: a site run has curriculum fraction 1, snapshot has {fraction}")
 
 
-def training_scenes(benchmark: str):
-    """The training split of ``benchmark``, the hand-made example scenes, or the scenes of a JSON file or folder."""
+def training_scenes(benchmark: str, holdout_every: int = 0):
+    """The training split of ``benchmark`` (without the scenes `np_sim.benchmarks.frozen.held_out` by
+    ``holdout_every``), the hand-made example scenes, or the scenes of a JSON file or folder."""
     if is_scene_path(benchmark):
         path = Path(benchmark)
         files = sorted(path.glob("*.json")) if path.is_dir() else [path]
@@ -106,8 +107,11 @@ def training_scenes(benchmark: str):
 
         return [s for s in example_scenes() if s.tags.get("expect") != "no_path"]
     from np_sim.benchmarks import load_benchmark
+    from np_sim.benchmarks.frozen import held_out
 
-    return load_benchmark(benchmark, "train")
+    scenes = load_benchmark(benchmark, "train")
+    left_out = set(held_out(len(scenes), holdout_every).tolist())
+    return [scene for k, scene in enumerate(scenes) if k not in left_out]
 
 
 def curriculum_scenes(scenes: list[Scene], region: str) -> list[Scene]:
@@ -149,7 +153,7 @@ class Trainer:
             self.sampler = PairedStartSampler(starts)
             select_sampler = fixed_start_sampler(starts)
         else:
-            self.scenes = training_scenes(config.benchmark)
+            self.scenes = training_scenes(config.benchmark, config.holdout_every)
             self.sampler = CurriculumStartSampler(curriculum_scenes(self.scenes, config.curriculum_region),
                                                   fraction=config.curriculum.start_fraction,
                                                   pool_size=config.curriculum_pool, seed=config.seed,

@@ -309,15 +309,33 @@ def validation_starts(name: str, per_scene: int = VALIDATION_STARTS_PER_SCENE, s
     return draw_frozen_starts(load_benchmark(name, "train"), n=per_scene, seed=seed, vehicle=vehicle)
 
 
+def held_out(n_scenes: int, every: int) -> np.ndarray:
+    """Indices of the training scenes a run trained with ``TrainConfig.holdout_every = every`` leaves out: every
+    ``every``-th scene (``every − 1``, ``2·every − 1``, …), so with the benchmarks' cell-by-cell scene order each
+    cell loses the same share (Topology-Stress, 8 scenes per cell, ``every`` 4: two per cell, 12 of 48). Empty for
+    ``every`` 0."""
+    if every < 0 or every == 1:
+        raise ConfigError(f"holdout_every: expected 0 (none) or an integer >= 2, got {every!r}")
+    return np.arange(every - 1, n_scenes, every) if every else np.zeros(0, int)
+
+
 def split_episodes(name: str, split: str = "test", per_scene: int = VALIDATION_STARTS_PER_SCENE,
-                   vehicle: VehicleSpec | None = None) -> tuple[list[Scene], np.ndarray]:
+                   vehicle: VehicleSpec | None = None, holdout_every: int = 0) -> tuple[list[Scene], np.ndarray]:
     """(scenes, (n_scenes, n, 3) starts) of benchmark ``name``: ``split`` 'test' gives the test scenes and their
-    frozen starts, 'validation' the training scenes and their `validation_starts` (``per_scene`` each)."""
+    frozen starts, 'validation' the training scenes and their `validation_starts` (``per_scene`` each), 'holdout'
+    only the training scenes `held_out` by ``holdout_every`` with the same validation starts."""
     if split == "test":
         return load_benchmark(name, "test"), frozen_starts(name)
+    if split not in ("validation", "holdout"):
+        raise ConfigError(f"split_episodes: unknown split {split!r}; expected 'test', 'validation' or 'holdout'")
+    scenes, starts = load_benchmark(name, "train"), validation_starts(name, per_scene, vehicle=vehicle)
     if split == "validation":
-        return load_benchmark(name, "train"), validation_starts(name, per_scene, vehicle=vehicle)
-    raise ConfigError(f"split_episodes: unknown split {split!r}; expected 'test' or 'validation'")
+        return scenes, starts
+    if not holdout_every:
+        raise ConfigError("split_episodes: the 'holdout' split needs checkpoints trained with "
+                          "TrainConfig.holdout_every >= 2 (their held-out training scenes)")
+    keep = held_out(len(scenes), holdout_every)
+    return [scenes[k] for k in keep], starts[keep]
 
 
 def frozen_starts(name: str, data_dir: str | Path | None = None) -> np.ndarray:

@@ -118,3 +118,22 @@ def test_the_validation_split_plans_seeded_starts_on_the_training_scenes(tmp_pat
     plan = planner.plan(train[1], validation_starts("factorial", per_scene=2)[1, 0])
     assert result["records"][2]["success"] == int(plan.success)
     assert result["records"][2]["L"] == pytest.approx(plan.metrics()[0], nan_ok=True)
+
+
+def test_the_holdout_split_plans_only_the_scenes_the_checkpoint_was_trained_without(tmp_path, capsys):
+    from np_policy.checkpoint import load_checkpoint, save_checkpoint
+    from np_sim.benchmarks import load_benchmark
+
+    payload = load_checkpoint(DEFAULT_CHECKPOINT)
+    payload["config"]["holdout_every"] = 4
+    held = save_checkpoint(tmp_path / "held.pt", payload)
+    result = evaluate.main(["--checkpoints", str(held), "--split", "holdout", "--starts-per-scene", "1",
+                            "--limit", "2", "--out", str(tmp_path / "out")])
+    train = load_benchmark("factorial", "train")
+    assert [r["scene"] for r in result["records"]] == [train[3].name, train[7].name]
+    assert json.loads((tmp_path / "out" / "config.json").read_text())["holdout_every"] == 4
+    with pytest.raises(SystemExit) as exit_info:  # the shipped checkpoint trained on every scene
+        evaluate.main(["--checkpoints", str(DEFAULT_CHECKPOINT), "--split", "holdout", "--limit", "1",
+                       "--out", str(tmp_path / "none")])
+    assert exit_info.value.code == 2
+    assert "--split holdout: the checkpoints must all have been trained with the same" in capsys.readouterr().err

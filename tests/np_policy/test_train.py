@@ -140,6 +140,25 @@ def test_benchmark_must_name_a_benchmark_or_scene_files(tmp_path):
         training_scenes(str(tmp_path))
 
 
+def test_a_holdout_run_trains_without_every_kth_benchmark_scene():
+    from np_policy.train import training_scenes
+    from np_sim.benchmarks import load_benchmark
+    from np_sim.errors import ConfigError
+
+    every = [s.name for s in load_benchmark("topology", "train")]
+    kept = [s.name for s in training_scenes("topology", 4)]
+    assert len(kept) == 36 and kept == [n for k, n in enumerate(every) if k % 4 != 3]
+    assert [s.name for s in training_scenes("topology")] == every
+    trainer = Trainer(TrainConfig.from_dict(TINY | {"benchmark": "topology", "holdout_every": 4}), "unused")
+    assert [s.name for s in trainer.scenes] == kept  # training and selection envs draw from these only
+    assert [s.name for s in trainer.select_envs.core.scenes] == [s.name for s in trainer.envs.core.scenes] == kept
+    assert TrainConfig.from_dict({"benchmark": "topology", "holdout_every": 4}).holdout_every == 4
+    with pytest.raises(ConfigError, match=r"TrainConfig.holdout_every: expected 0 or an integer >= 2 .* got 1"):
+        TrainConfig(benchmark="topology", holdout_every=1)
+    with pytest.raises(ConfigError, match=r"TrainConfig.holdout_every: .* got 4 on 'examples'"):
+        TrainConfig(benchmark="examples", holdout_every=4)
+
+
 def test_site_defaults_are_the_papers_real_vehicle_configuration():
     from np_policy.train import merge_config
     from np_sim.errors import ConfigError

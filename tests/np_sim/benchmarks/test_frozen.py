@@ -13,7 +13,9 @@ from np_sim.benchmarks.frozen import (
     benchmark_json,
     benchmark_path,
     draw_frozen_starts,
+    held_out,
     read_benchmark_file,
+    split_episodes,
 )
 from np_sim.collision import path_valid
 from np_sim.errors import ConfigError
@@ -64,6 +66,23 @@ def test_validation_starts_lie_on_the_training_scenes_seeded_apart_from_the_froz
         validation_starts("topology", per_scene=0)
     with pytest.raises(ConfigError, match="unknown benchmark"):
         validation_starts("tpcap")
+
+
+def test_the_holdout_split_is_every_kth_training_scene_with_its_validation_starts():
+    assert held_out(48, 4).tolist() == [3, 7, 11, 15, 19, 23, 27, 31, 35, 39, 43, 47]
+    assert held_out(48, 0).tolist() == []
+    with pytest.raises(ConfigError, match="expected 0 \\(none\\) or an integer >= 2, got 1"):
+        held_out(48, 1)
+    train = load_benchmark("topology", "train")
+    scenes, starts = split_episodes("topology", "holdout", per_scene=2, holdout_every=4)
+    cells = [s.name.rsplit("-", 1)[0] for s in scenes]
+    assert len(scenes) == 12 and all(cells.count(c) == 2 for c in cells)  # two of the eight scenes of each cell
+    assert [s.name for s in scenes] == [train[k].name for k in range(3, 48, 4)]
+    np.testing.assert_array_equal(starts, validation_starts("topology", per_scene=2)[3::4])
+    with pytest.raises(ConfigError, match="needs checkpoints trained with TrainConfig.holdout_every >= 2"):
+        split_episodes("topology", "holdout")
+    with pytest.raises(ConfigError, match="unknown split 'train'"):
+        split_episodes("topology", "train")
 
 
 def test_unknown_names_are_config_errors_listing_the_valid_ones(tmp_path):
