@@ -80,6 +80,21 @@ def find_case(unified: NeuralParkerPlanner, staged: StagedPlanner, scenes: list[
     raise RuntimeError("overview_case: no training start beyond the hand-off radius that both arms solve")
 
 
+def compare_arms(plans: dict[str, Plan]) -> str:
+    """One sentence: where the unified arm's path metrics (eq:metrics) are lower than the staged NeuralParker arm's
+    on this case (the paper's Table II finds them lower in all three on average; one pinned case need not)."""
+    ours, theirs = plans[UNIFIED].metrics(), plans[STAGED].metrics()
+    names = ("L", "reversals", "Δκ")
+    lower = [n for n, a, b in zip(names, ours, theirs) if a < b]
+    rest = [n for n in names if n not in lower]
+    shown = " / ".join(f"{v:.2f}" if n != "reversals" else str(int(v)) for n, v in zip(names, ours))
+    other = " / ".join(f"{v:.2f}" if n != "reversals" else str(int(v)) for n, v in zip(names, theirs))
+    verdict = ("lower in all three" if not rest else "lower in none of them" if not lower
+               else f"lower in {' and '.join(lower)}, not in {' and '.join(rest)}")
+    return (f"On this case the unified arm's L / reversals / Δκ are {shown} against the staged arm's {other}: "
+            f"{verdict}.")
+
+
 def format_case(scene: Scene, plans: dict[str, Plan], note: str, plan_time: bool = True) -> str:
     """Markdown: one row per arm with eq:metrics and, with ``plan_time``, the plan time measured while the case was
     pinned (a failed arm: its reason)."""
@@ -154,7 +169,7 @@ def run(checkpoint: Path | None = None, start_seed: int = 0, out: Path | None = 
         "arms": {arm: dict(zip(("L", "reversals", "delta_kappa"), plan.metrics()), success=plan.success,
                            plan_time_s=plan.plan_time_s) for arm, plan in plans.items()}}, indent=2, default=float))
     return {"folder": folder, "png": folder / "overview_case.png", "table": table, "scene": scene.name,
-            "path_table": format_case(scene, plans, note, plan_time=False)}
+            "path_table": format_case(scene, plans, note, plan_time=False), "comparison": compare_arms(plans)}
 
 
 @cli_boundary

@@ -536,7 +536,7 @@ def case_sections(work: Path, figures: Path, overview: dict) -> dict[str, list[s
         "fig:overview": [
             "## Fig. 4 (`fig:overview`): unified versus staged planning on one pinned case", "",
             f"![overview case](figures/{FIGURE_FILES['fig:overview']})", "", made["fig:overview"]["path_table"], "",
-            overview_text(overview["benchmark"]), ""],
+            made["fig:overview"]["comparison"] + " " + overview_text(overview["benchmark"]), ""],
         "fig:hermite-case": [
             "## Fig. 6 (`fig:hermite-case`): both connectors from one shared hand-off", "",
             f"![hermite case](figures/{FIGURE_FILES['fig:hermite-case']})", "", made["fig:hermite-case"]["table"], "",

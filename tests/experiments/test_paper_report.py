@@ -284,6 +284,21 @@ def test_overview_case_on_topology_pins_a_pocket_scene_without_the_hope_arm(tmp_
         overview_case.run(benchmark="site")
 
 
+def test_the_overview_sentence_names_the_metrics_where_unified_is_lower():
+    from np_sim.plan import Plan
+
+    def plan(arcs):  # straight or constant-curvature arcs: L = Σ|l|, reversals = sign changes, Δκ = Σ|κ jumps|
+        return Plan(start=np.zeros(3), arcs=np.array(arcs, float), success=True)
+
+    unified = plan([[0.0, 10.0], [0.2, 5.0]])               # L 15, 0 reversals, Δκ 0.2
+    staged = plan([[0.0, 6.0], [0.0, -2.0], [0.0, 4.0]])   # L 12, 2 reversals, Δκ 0
+    text = overview_case.compare_arms({"Unified NP": unified, "Hybrid A* → NP": staged})
+    assert text == ("On this case the unified arm's L / reversals / Δκ are 15.00 / 0 / 0.20 against the staged "
+                    "arm's 12.00 / 2 / 0.00: lower in reversals, not in L and Δκ.")
+    assert overview_case.compare_arms({"Unified NP": staged, "Hybrid A* → NP": staged}).endswith(
+        "lower in none of them.")
+
+
 @pytest.mark.parametrize("argv, words", [(["--out", "report.txt"], "ending in .md"),
                                          (["--runs", "no/such/folder"], "existing folder of run folders")])
 def test_paper_cli_refuses_bad_paths_with_one_error_line(capsys, argv, words):
