@@ -363,10 +363,14 @@ def benchmark_layout(benchmark: str) -> dict[str, Any]:
 
 
 def check_benchmark_layout(path: str | Path, config: TrainConfig, benchmark: str) -> None:
-    """CheckpointError naming ``path`` and both layouts when the checkpoint trained under ``config`` reads another
-    observation layout than ``benchmark``'s scenes need (e.g. a site checkpoint for the Factorial scenes)."""
+    """CheckpointError naming ``path`` and both layouts when the checkpoint trained under ``config`` on another
+    benchmark reads another observation layout than ``benchmark``'s scenes need (e.g. a site checkpoint for the
+    Factorial scenes). A checkpoint trained on ``benchmark`` itself plans its scenes whatever its layout: the
+    representation ablations of Table III (no added input, BEV) train there with layouts of their own."""
     from np_policy.checkpoint import check_layout
 
+    if config.benchmark == benchmark:
+        return
     check_layout(path, dataclasses.asdict(config.env.observation), benchmark_layout(benchmark),
                  f"trained on {config.benchmark!r}", f"benchmark {benchmark!r}")
 

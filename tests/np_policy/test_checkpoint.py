@@ -175,6 +175,21 @@ def test_a_site_checkpoint_is_refused_for_factorial_scenes_with_both_layouts_nam
     assert "observation.use_lidar: checkpoint has False, expected True" in message
 
 
+def test_a_representation_ablation_plans_the_benchmark_it_was_trained_on(tmp_path):
+    from np_sim.benchmarks import frozen_starts, load_benchmark
+
+    none = TrainConfig.from_dict({"benchmark": "topology", "env": {"observation": {
+        "use_obstacles": False, "use_boundary": False}}})
+    model = ActorCritic(none.env.observation, none.network)
+    path = save_checkpoint(tmp_path / "none.pt", {"model": model.state_dict(), "config": none.to_dict()})
+    planner = NeuralParkerPlanner.from_checkpoint(path, benchmark="topology")
+    assert planner.env_config.observation == none.env.observation  # no obstacle or boundary slots
+    plan = planner.plan(load_benchmark("topology", "test")[0], frozen_starts("topology")[0, 0])
+    assert plan.reason in ("", "collision", "timeout")  # an untrained policy plans; whether it parks is its own
+    with pytest.raises(CheckpointError, match="its observation layout \\(trained on 'topology': no obstacle slots"):
+        NeuralParkerPlanner.from_checkpoint(path, benchmark="factorial")  # another benchmark: the layout must match
+
+
 def test_an_invalid_stored_config_is_a_checkpoint_error(tmp_path):
     config = TrainConfig().to_dict()
     config["ppo"]["epochs"] = 2.5
