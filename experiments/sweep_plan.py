@@ -45,6 +45,11 @@ RECIPE_FILE = "recipe.json"
 """The one NeuralParker recipe every Factorial and Topology-Stress NeuralParker row merges its overrides over."""
 FACTORIAL_EPOCH_S = 46.8
 """Measured wall-clock seconds per epoch of the Factorial recipe on this 2-core machine (compute estimates)."""
+TOPOLOGY_NP_EPOCH_S = {"none": 41.0, "bev": 88.0, "vertices": 79.0}
+"""Seconds per epoch of the NeuralParker-backbone Topology-Stress rows on this machine, each on one thread beside
+one other one-thread run (compute estimates): the median ``epoch_s`` of the finished seed-0 runs (none 40.9 s,
+vertices 79.3 s: the slot tokens' attention is the update's largest cost) and the BEV seed 0 run's first twelve
+epochs (83–92 s: the raster and the frozen encoder at every step)."""
 SITE_EPOCH_S = 83.0
 """Seconds per epoch of the site run on this machine: its last ten epochs (65,536 steps each, ``steps_per_s`` of
 its ``metrics.jsonl``) took 81–88 s, about 5.5 h per 240-epoch run (compute estimates)."""
@@ -115,11 +120,9 @@ PAPER_PLAN = (
                   run_name=_LOT),
     Configuration("factorial_hope", "factorial", ("main", "staged"), "factorial_hope.json", recipe=False,
                   epoch_s=HOPE_EPISODE_S, trainer="hope_policy.train"),
-    Configuration("topology_np_none", "topology", ("representation",), "topology_np_none.json", run_name=_LOT),
-    Configuration("topology_np_bev", "topology", ("representation",), "topology_np_bev.json", run_name=_LOT,
-                  requires=_TOPOLOGY_AE),
-    Configuration("topology_np_vertices", "topology", ("representation",), "topology_np_vertices.json",
-                  run_name=_LOT),
+    *(Configuration(f"topology_np_{added}", "topology", ("representation",), f"topology_np_{added}.json",
+                    run_name=_LOT, epoch_s=TOPOLOGY_NP_EPOCH_S[added],
+                    requires=_TOPOLOGY_AE if added == "bev" else ()) for added in ("none", "bev", "vertices")),
     *(Configuration(f"topology_hope_{added}", "topology", ("representation",), f"topology_hope_{added}.json",
                     recipe=False, epoch_s=HOPE_BACKBONE_EPISODE_S[added], trainer="hope_policy.train",
                     requires=_TOPOLOGY_AE if added == "bev" else ()) for added in ("none", "bev", "vertices")),
@@ -383,7 +386,8 @@ def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
                      f"{describe(state, TRAINERS[run.config.trainer][0].rstrip('s'))}")
     unknown = sum(estimate_hours(r, s) is None for r, s in zip(runs, states))
     lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine (an estimate: {FACTORIAL_EPOCH_S} s "
-                 f"per Factorial or Topology-Stress epoch, {SITE_EPOCH_S} s per site epoch, {HOPE_EPISODE_S} s per "
+                 f"per Factorial epoch, {min(TOPOLOGY_NP_EPOCH_S.values())}–{max(TOPOLOGY_NP_EPOCH_S.values())} s per "
+                 f"NeuralParker Topology-Stress epoch on one thread beside another run, {SITE_EPOCH_S} s per site epoch, {HOPE_EPISODE_S} s per "
                  f"adapted-HOPE episode, {min(HOPE_BACKBONE_EPISODE_S.values())}–"
                  f"{max(HOPE_BACKBONE_EPISODE_S.values())} s per HOPE-style backbone episode)"
                  + (f", not counting {unknown} run(s) not available yet" if unknown else ""))
