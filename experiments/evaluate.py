@@ -66,10 +66,10 @@ def evaluate(benchmark: str, checkpoints: list[Path], config: NeuralParkerConfig
              resume: bool = False, split: str = "test",
              starts_per_scene: int = VALIDATION_STARTS_PER_SCENE) -> dict[str, Any]:
     """Plan every frozen start (``split`` 'validation': the validation starts on the training scenes,
-    ``starts_per_scene`` each) with every checkpoint for ``vehicle`` (default the sedan; a checkpoint trained for
-    another is refused), playing each as ``config`` says (the 'paper' preset: the mean action); returns the records
-    and the table text. Each finished episode is kept as it goes (`experiments.progress`); ``resume`` continues the
-    interrupted run in ``out``."""
+    ``starts_per_scene`` each; 'holdout': those of the training scenes the checkpoints left out) with every
+    checkpoint for ``vehicle`` (default the sedan; a checkpoint trained for another is refused), playing each as
+    ``config`` says (the 'paper' preset: the mean action); returns the records and the table text. Each finished
+    episode is kept as it goes (`experiments.progress`); ``resume`` continues the interrupted run in ``out``."""
     vehicle = VehicleSpec() if vehicle is None else vehicle
     holdout_every = shared_holdout(checkpoints, benchmark) if split == "holdout" else 0
     scenes, starts = split_episodes(benchmark, split, starts_per_scene, vehicle, holdout_every)

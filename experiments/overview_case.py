@@ -87,12 +87,14 @@ def compare_arms(plans: dict[str, Plan]) -> str:
     names = ("L", "reversals", "Δκ")
     lower = [n for n, a, b in zip(names, ours, theirs) if a < b]
     rest = [n for n in names if n not in lower]
-    shown = " / ".join(f"{v:.2f}" if n != "reversals" else str(int(v)) for n, v in zip(names, ours))
-    other = " / ".join(f"{v:.2f}" if n != "reversals" else str(int(v)) for n, v in zip(names, theirs))
+
+    def shown(metrics) -> str:
+        return " / ".join(str(int(v)) if n == "reversals" else f"{v:.2f}" for n, v in zip(names, metrics))
+
     verdict = ("lower in all three" if not rest else "lower in none of them" if not lower
                else f"lower in {' and '.join(lower)}, not in {' and '.join(rest)}")
-    return (f"On this case the unified arm's L / reversals / Δκ are {shown} against the staged arm's {other}: "
-            f"{verdict}.")
+    return (f"On this case the unified arm's L / reversals / Δκ are {shown(ours)} against the staged arm's "
+            f"{shown(theirs)}: {verdict}.")
 
 
 def format_case(scene: Scene, plans: dict[str, Plan], note: str, plan_time: bool = True) -> str:

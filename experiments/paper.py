@@ -13,7 +13,7 @@ folder (``eval_<benchmark>/records.csv``: the checkpoint's own connector, `exper
 method of `experiments.planners` for an adapted-HOPE checkpoint; ``eval_<benchmark>_ensemble/``: the ensemble
 connector swapped in at evaluation only; ``eval_<benchmark>_staged/``: the Hybrid A* → NP planner,
 `experiments.planners`; ``eval_<benchmark>_validation/``: the own planner on the validation starts of the training
-scenes, ``--split validation``, for the generalisation table under Fig. 5). A
+scenes, ``--split validation``, for the test-against-training-scenes tables of Table III's and Fig. 3's rows). A
 finished run without records is evaluated here (``--no-evaluate``: reported as not evaluated; an evaluation
 killed mid-way continues where it stopped, `experiments.progress`); a run that is not
 finished is named with its state ("0 of 3 seeds: not trained yet"), never left out. Success is on the full set,
@@ -427,7 +427,7 @@ def success_values(result: ArmResult, seeds) -> list[float]:
 
 
 def generalisation_lines(test: list[ArmResult], validation: list[ArmResult]) -> list[str]:
-    """Table III's rows on the frozen test starts beside the validation starts of the training scenes (mean ± sample
+    """A table's rows on the frozen test starts beside the validation starts of their training scenes (mean ± sample
     SD over the seeds measured on both) and the gap: a policy that has learned its training scenes but does not carry
     them over to the held-out ones shows a large gap."""
     lines = ["| Row | Seeds | Succ. test scenes | Succ. training scenes (validation starts) | test − training |",
@@ -451,9 +451,9 @@ def claim_lines(table_label: str, stats, results: list[ArmResult]) -> list[str]:
     return [f"- **{c.text}** ({c.table}): {claim_verdict(c, stats, seeds)}" for c in CLAIMS if c.table == table_label]
 
 
-def measure_all(runs: dict, evaluate: bool) -> dict[str, list[ArmResult]]:
-    """Every table's arms measured (an arm shared by tables is measured once)."""
-    active, done = active_trainers(), {}
+def measure_all(runs: dict, evaluate: bool, active: dict) -> dict[str, list[ArmResult]]:
+    """Every table's arms measured (an arm shared by tables is measured once); ``active``: `active_trainers`."""
+    done = {}
     tables = {MAIN_COMPARISON.label: MAIN_COMPARISON, TWOSTAGE.label: TWOSTAGE, TOPOLOGY_STRESS.label:
               TOPOLOGY_STRESS, HERMITE.label: HERMITE, CURRICULUM.label: CURRICULUM}
     out = {}
@@ -600,7 +600,7 @@ def build_report(runs_root: Path, out_md: Path, evaluate: bool = True) -> str:
     active = active_trainers()
     figures = out_md.parent / "figures"
     figures.mkdir(parents=True, exist_ok=True)
-    results = measure_all(runs, evaluate)
+    results = measure_all(runs, evaluate, active)
     cases = case_sections(run_folder("paper", None), figures, overview_arguments(runs))
     main = results[MAIN_COMPARISON.label]
     main_stats, main_cohorts = summarise(main)

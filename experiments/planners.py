@@ -66,8 +66,8 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
     """Plan every frozen start with every method for ``vehicle`` (default the sedan); returns the records, the
     table text and the run folder. With ``scenes`` (files), their starts instead (`experiments.scene_files`:
     the files' own, or ``n_starts`` drawn with ``seed``); with ``split`` 'validation', ``starts_per_scene`` seeded
-    starts on each training scene (`np_sim.benchmarks.validation_starts`). Each finished episode is kept in the folder as it goes
-    (`experiments.progress`); ``resume`` continues the interrupted run in ``out``."""
+    starts on each training scene (`np_sim.benchmarks.validation_starts`). Each finished episode is kept in the
+    folder as it goes (`experiments.progress`); ``resume`` continues the interrupted run in ``out``."""
     methods = check_names(DEFAULT_METHODS if methods is None else methods, METHODS)
     vehicle = VehicleSpec() if vehicle is None else vehicle
     options = PlannerOptions(checkpoint=checkpoint, convention=convention, ompl_seed=ompl_seed,

@@ -386,9 +386,10 @@ def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
                      f"{describe(state, TRAINERS[run.config.trainer][0].rstrip('s'))}")
     unknown = sum(estimate_hours(r, s) is None for r, s in zip(runs, states))
     lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine (an estimate: {FACTORIAL_EPOCH_S} s "
-                 f"per Factorial epoch, {min(TOPOLOGY_NP_EPOCH_S.values())}–{max(TOPOLOGY_NP_EPOCH_S.values())} s per "
-                 f"NeuralParker Topology-Stress epoch on one thread beside another run, {SITE_EPOCH_S} s per site epoch, {HOPE_EPISODE_S} s per "
-                 f"adapted-HOPE episode, {min(HOPE_BACKBONE_EPISODE_S.values())}–"
-                 f"{max(HOPE_BACKBONE_EPISODE_S.values())} s per HOPE-style backbone episode)"
+                 f"per Factorial epoch, {min(TOPOLOGY_NP_EPOCH_S.values())}–{max(TOPOLOGY_NP_EPOCH_S.values())} "
+                 f"s per NeuralParker Topology-Stress epoch on one thread beside another run, {SITE_EPOCH_S} s "
+                 f"per site epoch, {HOPE_EPISODE_S} s per adapted-HOPE episode, "
+                 f"{min(HOPE_BACKBONE_EPISODE_S.values())}–{max(HOPE_BACKBONE_EPISODE_S.values())} s per HOPE-style "
+                 "backbone episode)"
                  + (f", not counting {unknown} run(s) not available yet" if unknown else ""))
     return "\n".join(lines)

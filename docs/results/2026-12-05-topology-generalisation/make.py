@@ -22,7 +22,8 @@ from np_sim.plotting import plot_scene  # noqa: E402
 HERE = Path(__file__).resolve().parent
 RUNS = Path("checkpoints/runs")
 ROWS = {"NP vertices s0": "topology_np_vertices_seed0_lot", "NP none s0": "topology_np_none_seed0_lot",
-        "HOPE-style vertices s0": "topology_hope_vertices_seed0", "HOPE-style vertices s1": "topology_hope_vertices_seed1",
+        "HOPE-style vertices s0": "topology_hope_vertices_seed0",
+        "HOPE-style vertices s1": "topology_hope_vertices_seed1",
         "HOPE-style vertices s2": "topology_hope_vertices_seed2", "HOPE-style none s0": "topology_hope_none_seed0",
         "HOPE-style BEV s0": "topology_hope_bev_seed0"}
 CASES = [("topology-test-type3-medium-2", 0), ("topology-test-type3-hard-1", 0), ("topology-test-type3-hard-2", 0),
