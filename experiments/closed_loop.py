@@ -235,9 +235,12 @@ def planner_notes(names: list[str], config: ClosedLoopConfig) -> list[str]:
         return notes
     if footprint.accept_mean_m is not None:
         grown = (f", played first with the body grown by {footprint.mean_margin_m:g} m, then as is "
-                 f"(planner.neuralparker_footprint.mean_margin_m)," if footprint.mean_margin_m else "")
-        notes.append(f"NeuralParker (footprint) returns its mean rollout{grown} at once when that succeeds, is "
-                     f"steerable and keeps {footprint.accept_mean_m:g} m of clearance "
+                 f"(planner.neuralparker_footprint.mean_margin_m)" if footprint.mean_margin_m else "")
+        guarded = (f" (before the plain one, the guarded mean rollout: each arc the first of the mean action and "
+                   f"offsets at {', '.join(f'{s:g}' for s in footprint.guard_sigmas)} σ that parks or else does not "
+                   f"collide; planner.neuralparker_footprint.guard_sigmas)" if footprint.guard_sigmas else "")
+        notes.append(f"NeuralParker (footprint) returns its mean rollout{grown}{guarded}{',' if grown else ''} at once "
+                     f"when that succeeds, is steerable and keeps {footprint.accept_mean_m:g} m of clearance "
                      f"(planner.neuralparker_footprint.accept_mean_m); otherwise:")
     if footprint.samples:
         notes.append(f"NeuralParker (footprint) plays the best of its mean rollout and {footprint.samples} sampled "
@@ -253,8 +256,10 @@ def planner_notes(names: list[str], config: ClosedLoopConfig) -> list[str]:
             notes.append(f"After a rescue round the later ones are skipped once the chosen plan succeeds{keeps} "
                          f"(planner.neuralparker_footprint.rescue_stop_m).")
     if footprint.rollout_max_arcs is not None and (footprint.samples or footprint.rescue):
-        notes.append(f"NeuralParker (footprint)'s sampled and rescue rollouts end as timeouts after "
-                     f"{footprint.rollout_max_arcs} arcs, its mean rollout at the policy env's budget "
+        grown = ", grown-body mean" if footprint.mean_margin_m else ""
+        guarded = ", guarded" if footprint.guard_sigmas else ""
+        notes.append(f"NeuralParker (footprint)'s sampled{grown}{guarded} and rescue rollouts end as timeouts after "
+                     f"{footprint.rollout_max_arcs} arcs, its plain mean rollout at the policy env's budget "
                      f"(planner.neuralparker_footprint.rollout_max_arcs).")
     if footprint.connector:
         notes.append(f"NeuralParker (footprint)'s terminal connector: {footprint.connector} "
@@ -396,7 +401,7 @@ def call_table(records: list[dict], names: list[str]) -> list[str]:
     """Markdown lines: per method, every planner call's plan time (median, 90th percentile) and, for a
     staged-effort planner, how many calls each stage answered and their median time."""
     lines = ["| Method | Planner calls | Plan time, all calls: median / p90 (ms) | Calls answered by the mean "
-             "rollout / the sampled round / the rescue rounds (median ms) |", "|---|---|---|---|"]
+             "rollout / the guarded rollout / the sampled round / the rescue rounds (median ms) |", "|---|---|---|---|"]
     for name in names:
         rows = [r for r in records if r["planner"] == name]
         times = np.array([t for r in rows for t in r["plan_times_ms"]])

@@ -433,10 +433,10 @@ class NeuralParkerConfig:
     level (m, at most ``rescue_clearance_m``; 0 = any validated plan): a bound on the rounds of a call whose first
     rescue round found a plan. None = the later rounds run on the first round's rule, ``rescue_clearance_m``."""
     rollout_max_arcs: int | None = None
-    """Arc budget of the ``samples`` rollouts and the rescue rounds' (at most the checkpoint env's
-    ``episode.max_arcs``): one still running after this many arcs ends as a timeout, so they step at most
-    (``samples`` + the rescue rounds' rollouts) × this many envs per call. None = the env's budget (200 arcs for
-    the site checkpoints), which the mean rollout always keeps."""
+    """Arc budget of the ``samples`` rollouts, the rescue rounds', the grown-body mean rollout's and the guarded
+    rollout's (at most the checkpoint env's ``episode.max_arcs``): one still running after this many arcs ends as a
+    timeout, so the rounds step at most (``samples`` + the rescue rounds' rollouts) × this many envs per call. None =
+    the env's budget (200 arcs for the site checkpoints), which the plain mean rollout always keeps."""
     accept_mean_m: float | None = None
     """Anytime play: the mean rollout is returned at once, before any sampling, when it succeeds, passes the
     validation, is steerable (``weights.curvature_tolerance``) and keeps its footprint grown by this (m) off every
@@ -447,7 +447,14 @@ class NeuralParkerConfig:
     this on every side (m; the policy observes the grown body and the checks use it, so a success keeps about this
     much clearance) and returned when the anytime test accepts it; otherwise the plain mean rollout follows as
     without it, and both are candidates of the sampled round. Skipped where the grown body's start is in collision.
-    0 = the plain mean rollout only."""
+    It keeps the arc budget ``rollout_max_arcs`` (the plain mean rollout keeps the env's). 0 = the plain mean
+    rollout only."""
+    guard_sigmas: tuple[float, ...] = ()
+    """Anytime play (with ``accept_mean_m``): after the grown-body mean rollout and before the plain one, the guarded mean
+    rollout (`np_policy.guarded`: each arc the mean action and offsets of these multiples of the policy's standard
+    deviation, the first that parks or else the first that does not collide), in the env of the grown-body mean
+    rollout (``mean_margin_m``; the plain env without one), with the arc budget ``rollout_max_arcs``; returned when the anytime test accepts it,
+    otherwise a candidate of the sampled round. () = no guarded rollout."""
     margin_m: float = 0.0
     """The rollouts' collision checks use the footprint grown by this on every side (m,
     `np_sim.vehicle.VehicleSpec.inflated`); the choice's costs and the validation see the real body."""
@@ -484,6 +491,15 @@ class NeuralParkerConfig:
         if self.mean_margin_m and self.accept_mean_m is None:
             raise ConfigError(f"NeuralParkerConfig.mean_margin_m: a grown-body mean rollout ({self.mean_margin_m:g} m) "
                               "is an anytime answer; it needs accept_mean_m (the anytime test), got None")
+        sigmas = self.guard_sigmas
+        if not (isinstance(sigmas, (tuple, list)) and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                         and math.isfinite(v) and v > 0 for v in sigmas)):
+            raise ConfigError(f"NeuralParkerConfig.guard_sigmas: expected a list of finite numbers > 0 (multiples of "
+                              f"the policy's standard deviation), got {sigmas!r}")
+        object.__setattr__(self, "guard_sigmas", tuple(float(v) for v in sigmas))
+        if self.guard_sigmas and self.accept_mean_m is None:
+            raise ConfigError(f"NeuralParkerConfig.guard_sigmas: a guarded rollout ({list(self.guard_sigmas)}) is an "
+                              "anytime answer; it needs accept_mean_m (the anytime test), got None")
         if self.rescue_stop_m is not None and self.rescue_stop_m > self.rescue_clearance_m:
             raise ConfigError(f"NeuralParkerConfig.rescue_stop_m: expected at most rescue_clearance_m "
                               f"({self.rescue_clearance_m:g} m), got {self.rescue_stop_m!r}")

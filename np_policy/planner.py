@@ -32,6 +32,7 @@ import numpy as np
 
 from np_policy.checkpoint import check_vehicle, load_checkpoint, load_weights
 from np_policy.config import PAPER, NeuralParkerConfig, TrainConfig, check_benchmark_layout, checkpoint_config
+from np_policy.guarded import GuardedRollout
 from np_policy.inference import CompiledActor
 from np_policy.network import ActorCritic
 from np_policy.sampling import PolicyRollouts, choose, clearance_covers_sweep, clearance_level, steerable
@@ -118,12 +119,15 @@ class NeuralParkerPlanner:
         std = self.model.log_std.detach().exp().numpy()
         nearest = config.over_capacity == "nearest"
         self.mean = PolicyRollouts(self.actor, np.zeros(2), self.env_config, nearest=nearest)
-        grown = (dataclasses.replace(self.env_config, vehicle=self.env_config.vehicle.inflated(config.mean_margin_m))
-                 if config.mean_margin_m else None)
-        self.grown_mean = PolicyRollouts(self.actor, np.zeros(2), grown, nearest=nearest) if grown else None
         capped = rollout_env(self.env_config, config.rollout_max_arcs)
+        grown = (rollout_env(dataclasses.replace(self.env_config,
+                                                 vehicle=self.env_config.vehicle.inflated(config.mean_margin_m)),
+                             config.rollout_max_arcs) if config.mean_margin_m else None)
+        self.grown_mean = PolicyRollouts(self.actor, np.zeros(2), grown, nearest=nearest) if grown else None
         self.sampled = (PolicyRollouts(self.actor, std, capped, config.samples, config.seed, nearest=nearest)
                         if config.samples else None)
+        self.guarded = (GuardedRollout(self.actor, std, grown if grown is not None else capped, config.guard_sigmas,
+                                       nearest) if config.guard_sigmas else None)
         self.single = (PolicyRollouts(self.actor, std, self.env_config, 1, config.seed, nearest=nearest)
                        if config.action == "sample" else None)
         self.rescue = [PolicyRollouts(self.actor, std * scale, capped, n, config.seed + 1 + k, first_arc, nearest)
@@ -150,9 +154,10 @@ class NeuralParkerPlanner:
         """Roll out the mean action from ``start`` until success, collision or the arc budget (paper §III-A); with
         ``samples``, the best of that and the sampled rollouts (``np_policy.sampling.choose``), then the rescue
         rounds while the best fails or keeps too little clearance (``_rescue_wanted_m``), unless ``accept_mean_m``
-        accepts the mean rollout first (with ``mean_margin_m``, the grown-body mean rollout before the plain one);
-        with ``action='sample'``, one rollout of sampled actions. ``Plan.stage`` names the stage that gave the plan:
-        'mean' (either mean rollout), 'sampled' or 'rescue'."""
+        accepts the mean rollout first (with ``mean_margin_m``, the grown-body mean rollout before the plain one;
+        with ``guard_sigmas``, the guarded rollout between them); with ``action='sample'``, one rollout of sampled
+        actions. ``Plan.stage`` names the stage that gave the plan: 'mean' (either mean rollout), 'guarded',
+        'sampled' or 'rescue'."""
         t0 = time.perf_counter()
         if self.single is not None:
             plan = self.claimed(scene, self.single(scene, start, seed=query_seed(self.config.seed, start))[0])
@@ -161,6 +166,9 @@ class NeuralParkerPlanner:
         grown, answered = self.grown_answer(scene, start)
         if answered:
             return dataclasses.replace(grown, plan_time_s=time.perf_counter() - t0, stage="mean")
+        guarded, answered = self.guarded_answer(scene, start)
+        if answered:
+            return dataclasses.replace(guarded, plan_time_s=time.perf_counter() - t0, stage="guarded")
         plan, stage = self._mean_rollout(scene, start), "mean"
         if anytime:
             plan, answered = self._anytime_answer(scene, plan)
@@ -169,7 +177,7 @@ class NeuralParkerPlanner:
         elif self.sampled is None:
             plan = self.claimed(scene, plan)
         if self.sampled is not None:
-            candidates = [plan, *([grown] if grown is not None else []), *self.sampled(scene, start)]
+            candidates = [plan, *(p for p in (grown, guarded) if p is not None), *self.sampled(scene, start)]
             plan, stage = self._choose_claimed(scene, candidates, anytime), "sampled"
         for k, rounds in enumerate(self.rescue):
             if plan.success and not self._too_close(scene, plan, self._rescue_wanted_m(k)):
@@ -201,6 +209,17 @@ class NeuralParkerPlanner:
         it)."""
         grown = self.grown_mean_rollout(scene, start)
         return (None, False) if grown is None else self._anytime_answer(scene, grown)
+
+    def guarded_answer(self, scene: Scene, start) -> tuple[Plan | None, bool]:
+        """(the guarded rollout (`np_policy.guarded`), validated with the real body, or None without one or where
+        its body's start is in collision; whether the anytime test accepts it)."""
+        if self.guarded is None:
+            return None, False
+        try:
+            plan = self.guarded(scene, start)
+        except StartInCollisionError:
+            return None, False
+        return self._anytime_answer(scene, plan)
 
     def _anytime_answer(self, scene: Scene, plan: Plan) -> tuple[Plan, bool]:
         """(``plan`` validated, whether the anytime test accepts it); an accepted plan is not validated a second

@@ -192,6 +192,15 @@ class BatchCore:
         self.observe_nearest(rows)
         self.observe_bev(rows)
 
+    def copy_env(self, source: int, rows) -> None:
+        """Envs ``rows`` continue from env ``source``'s state: pose, episode counters, scene and observation
+        (the Hermite scratch and ``R`` are per-step outputs and are not state). Branching several actions from one
+        state is then one ``step`` over those rows."""
+        rows = checked_rows(rows, self.num_envs)
+        source = int(checked_rows([source], self.num_envs)[0])
+        self.S[rows] = self.S[source]
+        self.obs[rows] = self.obs[source]
+
     def observe_nearest(self, env_ids: np.ndarray) -> None:
         """Obstacle slots of the envs ``env_ids`` whose scene exceeds the slots: the nearest obstacles to their
         current poses (`np_sim.nearest`); other envs keep the scene's constant slots."""

@@ -123,20 +123,24 @@ def test_footprint_preset_fields_reach_the_planner_and_the_config(tmp_path):
     out = tmp_path / "run"
     rescue = 'planner.neuralparker_footprint.rescue=[[8, 2], [6, 1, "uniform"]]'
     main(["--clips", "--clip-names", KNOWN_FEASIBLE, "--planners", "neuralparker_footprint", "--no-render", "--set",
-          "planner.neuralparker_footprint.samples=4", rescue, "--out", str(out)])
+          "planner.neuralparker_footprint.samples=4", rescue, "planner.neuralparker_footprint.guard_sigmas=[1, 2, 3]",
+          "--out", str(out)])
     config = json.loads((out / "config.json").read_text())["config"]["planner"]["neuralparker_footprint"]
     assert config["samples"] == 4 and config["connector"] == "centred" and config["rescue_clearance_m"] == 0.2
     assert config["rescue"] == [[8, 2.0, "policy"], [6, 1.0, "uniform"]] and config["accept_mean_m"] == 0.2
     assert config["rollout_max_arcs"] == 50 and config["rescue_stop_m"] is None and config["mean_margin_m"] == 0.2
     table = (out / "table.md").read_text()
     assert ("returns its mean rollout, played first with the body grown by 0.2 m, then as is "
-            "(planner.neuralparker_footprint.mean_margin_m), at once when that succeeds, is steerable and keeps "
+            "(planner.neuralparker_footprint.mean_margin_m) (before the plain one, the guarded mean rollout: each arc "
+            "the first of the mean action and offsets at 1, 2, 3 σ that parks or else does not collide; "
+            "planner.neuralparker_footprint.guard_sigmas), at once when that succeeds, is steerable and keeps "
             "0.2 m of clearance") in table
     assert "best of its mean rollout and 4 sampled rollouts" in table and "terminal connector: centred" in table
     assert ("When none of them succeeds or the best keeps less than 0.2 m clearance it samples 8 at 2 σ, then 6 "
             "at 1 σ after a uniform first arc (planner.neuralparker_footprint.rescue)." in table)
-    assert ("sampled and rescue rollouts end as timeouts after 50 arcs, its mean rollout at the policy env's budget "
-            "(planner.neuralparker_footprint.rollout_max_arcs)." in table and "rescue_stop_m" not in table)
+    assert ("sampled, grown-body mean, guarded and rescue rollouts end as timeouts after 50 arcs, its plain mean "
+            "rollout at the policy env's budget (planner.neuralparker_footprint.rollout_max_arcs)." in table
+            and "rescue_stop_m" not in table)
 
 
 def test_the_default_site_planners_are_the_presets():

@@ -9,16 +9,14 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from shapely.geometry import LinearRing, Point
 from shapely.geometry import Polygon as ShapelyPolygon
-from shapely.ops import unary_union
 
+from clearance_oracle import shapely_clearance  # tests/clearance_oracle.py
 from np_policy.config import FOOTPRINT_ANYTIME, FOOTPRINT_BEST_OF_N, PRESETS, NeuralParkerConfig
 from np_policy.planner import NeuralParkerPlanner, Policy
 from np_sim.clips.generation import generate_clip
 from np_sim.errors import ConfigError
 from np_sim.validate import validation_failure
-from np_sim.scene import CircleObstacle
 from tracking.perception import perceived_scene
 
 CHECKPOINT = Path("checkpoints/site_np_footprint.pt")
@@ -39,13 +37,6 @@ def first_frames():
     return frames
 
 
-def _shapely_clearance(scene, rows, body) -> float:
-    """Least distance (m) from the body's rectangle at any pose row to an obstacle or the boundary ring."""
-    shapes = [Point(*o.center).buffer(o.radius, 64) if isinstance(o, CircleObstacle) else ShapelyPolygon(o.vertices)
-              for o in scene.obstacles]
-    obstacles, ring = unary_union(shapes), LinearRing(scene.boundary)
-    return min(min(obstacles.distance(fp), ring.distance(fp))
-               for fp in (ShapelyPolygon(body.footprint(pose)) for pose in rows[:, :3]))
 
 
 @pytest.fixture(scope="module")
@@ -66,7 +57,7 @@ def test_the_mean_rollout_is_kept_when_clear_and_otherwise_the_answer_is_best_of
             mean = anytime.mean(scene, start)[0]
             np.testing.assert_array_equal(plan.arcs, mean.arcs)
             rows = plan.sample(0.05)
-            assert _shapely_clearance(scene, rows, anytime.body) >= FOOTPRINT_ANYTIME.accept_mean_m - 1e-9
+            assert shapely_clearance(scene, rows, anytime.body) >= FOOTPRINT_ANYTIME.accept_mean_m - 1e-9
             assert anytime.accept_implies_valid and plan.success  # accepted without a second validation …
             assert validation_failure(scene, plan, "footprint", anytime.body) == ""  # … which it would pass
         else:
@@ -144,7 +135,7 @@ def test_the_grown_body_mean_rollout_answers_first_and_keeps_the_clearance_with_
     plan = grown.plan(scene, start)
     assert plan.stage == "mean" and plan.success
     np.testing.assert_array_equal(plan.arcs, grown.grown_mean_rollout(scene, start).arcs)
-    assert _shapely_clearance(scene, plan.sample(0.05), grown.body) >= 0.2 - 1e-9
+    assert shapely_clearance(scene, plan.sample(0.05), grown.body) >= 0.2 - 1e-9
     assert validation_failure(scene, plan, "footprint", grown.body) == ""
 
 

@@ -68,3 +68,28 @@ def test_an_empty_subset_changes_nothing_and_bad_rows_are_named():
         part.step(np.zeros((2, 2)), np.array([0.0, 1.0]))
     with pytest.raises(ValueError, match=r"shape \(2, 2\)"):
         part.step(np.zeros((4, 2)), np.array([0, 1]))
+
+
+def test_a_copied_env_steps_like_its_source_and_only_its_rows_change():
+    """``copy_env``: after copying env 0's state into envs 2 and 5, stepping all three with one action gives
+    the same results and states as env 0, stepped twice over (a twin core that never copied)."""
+    n = 8
+    core, twin = _twin_cores(n)
+    rng = np.random.default_rng(11)
+    for _ in range(3):  # move the envs apart first
+        actions = np.column_stack([rng.uniform(-1, 1, n), rng.uniform(-0.4, 0.4, n)])
+        core.step(actions)
+        twin.step(actions)
+    untouched = np.setdiff1d(np.arange(n), [2, 5])
+    before = core.S[untouched].copy()
+    core.copy_env(0, [2, 5])
+    np.testing.assert_array_equal(core.S[untouched], before)
+    action = np.array([[0.3, 0.2]])
+    core.step(np.repeat(action, 3, axis=0), [0, 2, 5])
+    twin.step(action, [0])
+    for row in (0, 2, 5):
+        np.testing.assert_array_equal(core.S[row], twin.S[0])
+        np.testing.assert_array_equal(core.R[row], twin.R[0])
+        np.testing.assert_array_equal(core.obs[row], twin.obs[0])
+    with pytest.raises(ValueError, match=r"rows must lie in \[0, 8\)"):
+        core.copy_env(8, [1])
