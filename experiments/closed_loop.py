@@ -237,8 +237,8 @@ def planner_notes(names: list[str], config: ClosedLoopConfig) -> list[str]:
         grown = (f", played first with the body grown by {footprint.mean_margin_m:g} m, then as is "
                  f"(planner.neuralparker_footprint.mean_margin_m)" if footprint.mean_margin_m else "")
         guarded = (f" (before the plain one, the guarded mean rollout: each arc the first of the mean action and "
-                   f"offsets at {', '.join(f'{s:g}' for s in footprint.guard_sigmas)} σ that parks or else does not "
-                   f"collide; planner.neuralparker_footprint.guard_sigmas)" if footprint.guard_sigmas else "")
+                   f"offsets at {', '.join(f'{s:g}' for s in footprint.guard_sigmas)} σ that parks aligned, else does "
+                   f"not collide; planner.neuralparker_footprint.guard_sigmas)" if footprint.guard_sigmas else "")
         notes.append(f"NeuralParker (footprint) returns its mean rollout{grown}{guarded}{',' if grown else ''} at once "
                      f"when that succeeds, is steerable and keeps {footprint.accept_mean_m:g} m of clearance "
                      f"(planner.neuralparker_footprint.accept_mean_m); otherwise:")

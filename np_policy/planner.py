@@ -127,7 +127,7 @@ class NeuralParkerPlanner:
         self.sampled = (PolicyRollouts(self.actor, std, capped, config.samples, config.seed, nearest=nearest)
                         if config.samples else None)
         self.guarded = (GuardedRollout(self.actor, std, grown if grown is not None else capped, config.guard_sigmas,
-                                       nearest) if config.guard_sigmas else None)
+                                       nearest, config.weights.heading_slack_deg) if config.guard_sigmas else None)
         self.single = (PolicyRollouts(self.actor, std, self.env_config, 1, config.seed, nearest=nearest)
                        if config.action == "sample" else None)
         self.rescue = [PolicyRollouts(self.actor, std * scale, capped, n, config.seed + 1 + k, first_arc, nearest)

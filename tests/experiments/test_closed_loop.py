@@ -132,7 +132,7 @@ def test_footprint_preset_fields_reach_the_planner_and_the_config(tmp_path):
     table = (out / "table.md").read_text()
     assert ("returns its mean rollout, played first with the body grown by 0.2 m, then as is "
             "(planner.neuralparker_footprint.mean_margin_m) (before the plain one, the guarded mean rollout: each arc "
-            "the first of the mean action and offsets at 1, 2, 3 σ that parks or else does not collide; "
+            "the first of the mean action and offsets at 1, 2, 3 σ that parks aligned, else does not collide; "
             "planner.neuralparker_footprint.guard_sigmas), at once when that succeeds, is steerable and keeps "
             "0.2 m of clearance") in table
     assert "best of its mean rollout and 4 sampled rollouts" in table and "terminal connector: centred" in table

@@ -10,10 +10,12 @@ from clearance_oracle import shapely_clearance  # tests/clearance_oracle.py
 from np_policy.config import FOOTPRINT_ANYTIME, NeuralParkerConfig
 from np_policy.guarded import GUARD_DIRECTIONS, guard_choice, guard_offsets
 from np_policy.planner import NeuralParkerPlanner, Policy
+from np_policy.sampling import hermite_of
 from np_sim.clips.generation import generate_clip
 from np_sim.env_core import BatchCore
 from np_sim.errors import ConfigError
 from np_sim.kernels import step as K
+from np_sim.plan import hermite_coefficients
 from np_sim.validate import validation_failure
 from tracking.perception import perceived_scene
 
@@ -58,27 +60,37 @@ def _results(rows):
     return R
 
 
-def test_the_choice_takes_the_first_success_else_the_first_free_row():
-    assert guard_choice(_results([(0, 0), (0, 1), (1, 0), (1, 0)])) == 2
-    assert guard_choice(_results([(0, 1), (0, 1), (0, 0), (0, 0)])) == 2
-    assert guard_choice(_results([(0, 0), (0, 0)])) == 0
-    assert guard_choice(_results([(0, 1), (0, 1)])) is None
+def test_the_choice_takes_an_aligned_park_else_a_free_row_else_any_park():
+    no = np.zeros(4, bool)
+    assert guard_choice(_results([(0, 0), (0, 1), (1, 0), (1, 0)]), np.array([0, 0, 0, 1], bool)) == 3
+    assert guard_choice(_results([(0, 1), (0, 0), (1, 0), (1, 0)]), no) == 1  # a park at the edge is passed over
+    assert guard_choice(_results([(0, 1), (1, 0), (0, 1), (1, 0)]), no) == 1  # … unless nothing else is free
+    assert guard_choice(_results([(0, 0), (0, 0)]), no[:2]) == 0
+    assert guard_choice(_results([(0, 1), (0, 1)]), no[:2]) is None
 
 
 def _single_step(scene, config, state, action):
-    """One arc from ``state`` (a state row of ``BatchCore.S``) in a fresh one-env core: its result row."""
+    """One arc from ``state`` (a state row of ``BatchCore.S``) in a fresh one-env core: 'collision', 'free',
+    'aligned' (parks within 5° of the target's heading: the Hermite cubic's end tangent) or 'edge' (parks beyond)."""
     core = BatchCore([scene], 1, config, None, nearest=True)
     core.reset_envs([0], np.random.default_rng(0), 0, state[K.S_X: K.S_TH + 1])
     core.S[0] = state  # counters too; the observation is refreshed by the step itself
     core.step(np.asarray(action, float)[None])
-    return core.R[0].copy(), core.S[0].copy()
+    if core.R[0, K.R_SUCCESS] == 0:
+        return "collision" if core.R[0, K.R_COLLISION] > 0 else "free"
+    hermite = hermite_of(core, 0, scene)
+    c = hermite_coefficients(hermite.points)
+    tangent = c[1] + 2.0 * c[2] + 3.0 * c[3]  # dr/dt of the cubic at its end, t = 1
+    heading = np.arctan2(tangent[1], tangent[0]) + (0.0 if hermite.forward else np.pi)
+    return "aligned" if abs(np.remainder(heading - scene.target[2] + np.pi, 2 * np.pi) - np.pi) <= np.radians(5.0) \
+        else "edge"
 
 
 @pytest.mark.parametrize("seed", GUARDED_SEEDS)
 def test_every_arc_of_the_guarded_rollout_follows_its_rule_replayed_in_single_envs(planner, seed):
-    """Each taken arc, replayed alone: the rows before it in the star neither park nor, unless it parks, stay
-    free; the mean is the compiled actor's at the replayed state. Independent of the batched branching and of
-    ``BatchCore.copy_env``."""
+    """Each taken arc, replayed with every row of the star stepped alone: it is the first aligned park, else the
+    first free row, else the first park; the mean is the compiled actor's at the replayed state. Independent of the
+    batched branching and of ``BatchCore.copy_env``."""
     scene, start = _first_frame(seed)
     guarded = planner.guarded
     config = guarded.config
@@ -91,18 +103,11 @@ def test_every_arc_of_the_guarded_rollout_follows_its_rule_replayed_in_single_en
     for arc in plan.arcs:
         mean = np.asarray(planner.actor.batch(core.obs[:1].copy()), np.float64)[0]
         candidates = np.clip(mean + offsets, -1.0, 1.0)
-        taken = np.flatnonzero(np.all(np.isclose(candidates * scale, arc, rtol=0, atol=1e-4), axis=1))[0]
-        results = [_single_step(scene, config, core.S[0].copy(), a)[0] for a in candidates[:taken + 1]]
-        parks = results[-1][K.R_SUCCESS] > 0
-        assert not any(r[K.R_SUCCESS] > 0 for r in results[:-1])
-        if not parks:
-            assert all(r[K.R_COLLISION] > 0 for r in results[:-1]) and results[-1][K.R_COLLISION] == 0
-            assert not any(_single_step(scene, config, core.S[0].copy(), a)[0][K.R_SUCCESS] > 0
-                           for a in candidates[taken + 1:])
-        core.step(candidates[taken][None])
+        outcomes = [_single_step(scene, config, core.S[0].copy(), a) for a in candidates]
+        expected = next(outcomes.index(kind) for kind in ("aligned", "free", "edge") if kind in outcomes)
+        np.testing.assert_allclose(candidates[expected] * scale, arc, rtol=0, atol=1e-4)
+        core.step(candidates[expected][None])
     assert core.R[0, K.R_SUCCESS] > 0  # the replay parks where the plan does
-
-
 
 
 @pytest.mark.parametrize("seed", GUARDED_SEEDS)
