@@ -41,13 +41,12 @@ from tqdm import tqdm
 
 from experiments.common import first, mean_sd
 from experiments.progress import EpisodeProgress, check_out, progress_folder
-from experiments.scene_files import add_split_arguments
+from experiments.scene_files import add_split_arguments, common_holdout
 from np_policy.config import ACTIONS, PAPER, PRESETS, NeuralParkerConfig
 from np_policy.planner import NeuralParkerPlanner, Policy
 from np_sim.benchmarks.frozen import VALIDATION_STARTS_PER_SCENE, split_episodes
 from np_sim.cli import cli_boundary, existing_file, non_negative_int, positive_int, vehicle_spec
 from np_sim.config import CONNECTOR_VARIANTS
-from np_sim.errors import ConfigError
 from np_sim.validate import plan_valid
 from np_sim.vehicle import VehicleSpec
 
@@ -97,11 +96,7 @@ def evaluate(benchmark: str, checkpoints: list[Path], config: NeuralParkerConfig
 def shared_holdout(checkpoints: list[Path], benchmark: str) -> int:
     """The ``TrainConfig.holdout_every`` every checkpoint was trained with (ConfigError naming them when they differ
     or when none left scenes out)."""
-    values = {str(path): Policy.load(path, benchmark).train.holdout_every for path in checkpoints}
-    if len(set(values.values())) != 1 or not next(iter(values.values())):
-        raise ConfigError("--split holdout: the checkpoints must all have been trained with the same "
-                          f"TrainConfig.holdout_every >= 2, got {values}")
-    return next(iter(values.values()))
+    return common_holdout({str(path): Policy.load(path, benchmark).train.holdout_every for path in checkpoints})
 
 
 def episode_row(planner: NeuralParkerPlanner, config: NeuralParkerConfig, scene, start, vehicle: VehicleSpec,

@@ -3,7 +3,7 @@
 
 ``python -m experiments.planners --benchmark factorial|topology [--checkpoint PATH] [--methods ...]
 [--convention reference_point|footprint] [--vehicle sedan|van|FILE] [--limit N] [--out DIR [--resume]]
-[--scenes FILE... [--starts N] [--seed S] | --split validation [--starts-per-scene N]]``
+[--scenes FILE... [--starts N] [--seed S] | --split validation|holdout [--starts-per-scene N]]``
 
 Methods: Hybrid A*, NP-Guided A* (Hybrid A* guided by one NeuralParker rollout), the OMPL peer (RRT* in a
 Reeds–Shepp space, same time budget as Hybrid A*), NeuralParker (the checkpoint's deterministic policy) and the
@@ -39,9 +39,12 @@ from tqdm import tqdm
 from experiments.common import first
 from experiments.progress import EpisodeProgress, check_out, progress_folder
 from experiments.registry import PlannerOptions, build_planners, check_names, label
-from experiments.scene_files import (add_scene_arguments, add_split_arguments, describe, episode_scenes,
-                                     load_scene_files, scene_columns, starts_summary, strictest)
+from experiments.scene_files import (add_scene_arguments, add_split_arguments, common_holdout, describe,
+                                     episode_scenes, load_scene_files, scene_columns, starts_summary, strictest)
+from hope_policy.checkpoint import load_hope_checkpoint
 from hope_policy.config import HOPE_ACTIONS
+from hope_policy.train import HopeTrainConfig
+from np_policy.planner import Policy
 from np_sim.benchmarks.frozen import VALIDATION_STARTS_PER_SCENE
 from np_sim.cli import cli_boundary, non_negative_int, positive_int, vehicle_spec
 from np_sim.collision import path_valid
@@ -76,10 +79,12 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
     planners = build_planners(methods, options)
     files = (load_scene_files(scenes, n_starts, seed, strictest(p.convention for p in planners.values()), vehicle)
              if scenes else None)
-    scenes, starts = episode_scenes(benchmark, files, split, starts_per_scene, vehicle)
+    holdout_every = (learned_holdout(methods, checkpoint, hope_checkpoint, benchmark) if split == "holdout" else 0)
+    scenes, starts = episode_scenes(benchmark, files, split, starts_per_scene, vehicle, holdout_every)
     episodes = first([(k, j) for k in range(len(scenes)) for j in range(len(starts[k]))], limit)
     settings = {"benchmark": None if files else benchmark, "scenes": describe(files), "starts_seed": seed,
                 **({} if files or split == "test" else {"split": split, "starts_per_scene": starts_per_scene}),
+                **({"holdout_every": holdout_every} if holdout_every else {}),
                 "methods": methods, "checkpoint": None if checkpoint is None else str(checkpoint),
                 "convention": convention, "vehicle": vehicle.to_dict(), "episodes": len(episodes),
                 "ompl_seed": ompl_seed, "neuralparker": options.neuralparker.to_dict(),
@@ -97,6 +102,25 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
         **settings, "hybrid_astar": {k: v for k, v in vars(planners.get("hybrid_astar", HybridAStar()).config).items()
                                      if k != "vehicle"}})
     return {"records": records, "table": table, "folder": folder, "starts": starts_summary(files)}
+
+
+NP_METHODS = ("np_guided_astar", "neuralparker", "staged_astar_np")
+"""Methods that play the NeuralParker checkpoint (``--checkpoint``)."""
+HOPE_METHODS = ("hope", "staged_astar_hope")
+"""Methods that play the adapted-HOPE checkpoint (``--hope-checkpoint``)."""
+
+
+def learned_holdout(methods: list[str], checkpoint: Path | None, hope_checkpoint: Path | None,
+                    benchmark: str) -> int:
+    """The ``holdout_every`` the learned methods' checkpoints were all trained with (``--split holdout``:
+    `experiments.scene_files.common_holdout`); ConfigError when no learned method runs or they differ."""
+    values = {}
+    if checkpoint is not None and any(m in NP_METHODS for m in methods):
+        values[str(checkpoint)] = Policy.load(checkpoint, benchmark).train.holdout_every
+    if hope_checkpoint is not None and any(m in HOPE_METHODS for m in methods):
+        payload = load_hope_checkpoint(hope_checkpoint)
+        values[str(hope_checkpoint)] = HopeTrainConfig.from_dict(payload["config"]).holdout_every
+    return common_holdout(values)
 
 
 def episode_rows(planners: dict[str, Any], scene, start, vehicle: VehicleSpec, ompl_seed: int,
@@ -192,10 +216,10 @@ def main(argv=None) -> dict[str, Any]:
                              "new or empty --out starts a fresh run)")
     parser.add_argument("--limit", type=positive_int, help="only the first N frozen episodes (smoke runs)")
     add_scene_arguments(parser)
-    add_split_arguments(parser)
+    add_split_arguments(parser, ("test", "validation", "holdout"))
     args = parser.parse_args(argv)
     if args.scenes and args.split != "test":
-        parser.error("--split validation plans the benchmark's training scenes; it cannot go with --scenes")
+        parser.error(f"--split {args.split} plans the benchmark's training scenes; it cannot go with --scenes")
     check_out(parser, args.out, args.resume)
     result = run(args.benchmark, args.methods, args.checkpoint, args.convention, args.out, args.limit, args.ompl_seed,
                  hope_checkpoint=args.hope_checkpoint, hope_action=args.hope_action, hope_seed=args.hope_seed,

@@ -71,15 +71,24 @@ def load_scene_files(paths: Iterable[Path], n_starts: int | None = None, seed: i
 
 
 def episode_scenes(benchmark: str, files: list[SceneFile] | None, split: str = "test",
-                   starts_per_scene: int = VALIDATION_STARTS_PER_SCENE,
-                   vehicle: VehicleSpec | None = None) -> tuple[list[Scene], list[np.ndarray]]:
+                   starts_per_scene: int = VALIDATION_STARTS_PER_SCENE, vehicle: VehicleSpec | None = None,
+                   holdout_every: int = 0) -> tuple[list[Scene], list[np.ndarray]]:
     """(scenes, per-scene (n, 3) starts): the scene files' when given, else the benchmark's ``split``
     (`np_sim.benchmarks.frozen.split_episodes`: the test scenes and frozen starts, or the validation starts on the
-    training scenes)."""
+    training scenes, or on those ``holdout_every`` left out)."""
     if files:
         return [f.scene for f in files], [f.starts.poses for f in files]
-    scenes, starts = split_episodes(benchmark, split, starts_per_scene, vehicle)
+    scenes, starts = split_episodes(benchmark, split, starts_per_scene, vehicle, holdout_every)
     return scenes, list(starts)
+
+
+def common_holdout(values: dict[str, int]) -> int:
+    """The ``holdout_every`` all the checkpoints named in ``values`` (path → its value) were trained with, for
+    ``--split holdout``; ConfigError naming them when there are none, they differ or none left scenes out."""
+    if not values or len(set(values.values())) != 1 or next(iter(values.values())) < 2:
+        raise ConfigError("--split holdout: the checkpoints must all have been trained with the same "
+                          f"holdout_every >= 2 (TrainConfig or HopeTrainConfig), got {values or 'no checkpoint'}")
+    return next(iter(values.values()))
 
 
 SPLIT_HELP = {"test": "the frozen test starts (default)",

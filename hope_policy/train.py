@@ -49,8 +49,8 @@ from hope_policy.spaces import observation_space
 from np_policy.checkpoint import CheckpointError, check_config, load_weights, write_atomic
 from np_policy.config import CURRICULUM_REGIONS, check_types
 from np_policy.threads import thread_counts
-from np_policy.train import curriculum_scenes, merge_config, prepare_run_folder, read_metrics, write_metrics
-from np_sim.benchmarks import load_benchmark
+from np_policy.train import (curriculum_scenes, merge_config, prepare_run_folder, read_metrics, training_scenes,
+                             write_metrics)
 from np_sim.cli import cli_boundary, non_negative_int, positive_float, positive_int
 from np_sim.config import config_from_dict
 from np_sim.curriculum import CurriculumSchedule, CurriculumStartSampler
@@ -87,6 +87,11 @@ class HopeTrainConfig:
     bev_encoder_file: str = ""
     """The pretrained BEV autoencoder file (``python -m np_policy.pretrain_bev``) of ``env.added_input='bev'``;
     empty for the other inputs."""
+    holdout_every: int = 0
+    """Beyond the paper: leave every this-many-th training scene out of training (as
+    ``np_policy.config.TrainConfig.holdout_every``), so ``python -m experiments.planners --split holdout`` can measure
+    how the run carries over to scenes it never saw without looking at the test scenes; 0 (the paper's) trains on
+    all of them."""
     torch_threads: int = 1
     """torch intra-op threads, set again before every update: the envs' numba parallel loops reset the OpenMP
     thread count, and a sum split over another number of threads can differ in its last bit."""
@@ -102,6 +107,9 @@ class HopeTrainConfig:
         if self.ppo.batch_size % self.num_envs:
             raise ConfigError(f"HopeTrainConfig.num_envs: ppo.batch_size={self.ppo.batch_size} must be a multiple "
                               f"of num_envs, got {self.num_envs}")
+        if isinstance(self.holdout_every, bool) or self.holdout_every < 0 or self.holdout_every == 1:
+            raise ConfigError(f"HopeTrainConfig.holdout_every: expected 0 or an integer >= 2, got "
+                              f"{self.holdout_every!r}")
         if self.curriculum_region not in CURRICULUM_REGIONS:
             raise ConfigError(f"HopeTrainConfig.curriculum_region: expected one of {CURRICULUM_REGIONS}, got "
                               f"{self.curriculum_region!r}")
@@ -139,7 +147,7 @@ class HopeTrainer:
         self.config = config
         torch.set_num_threads(config.torch_threads)  # the orthogonal initialisation's QR depends on it too
         torch.manual_seed(config.seed)
-        scenes = load_benchmark(config.benchmark, "train")
+        scenes = training_scenes(config.benchmark, config.holdout_every)
         schedule = config.env.curriculum
         self.sampler = (CurriculumStartSampler(curriculum_scenes(scenes, config.curriculum_region),
                                                fraction=schedule.start_fraction,

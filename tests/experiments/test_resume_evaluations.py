@@ -137,3 +137,27 @@ def test_the_holdout_split_plans_only_the_scenes_the_checkpoint_was_trained_with
                        "--out", str(tmp_path / "none")])
     assert exit_info.value.code == 2
     assert "--split holdout: the checkpoints must all have been trained with the same" in capsys.readouterr().err
+
+
+def test_the_planners_holdout_split_reads_the_learned_methods_checkpoints(tmp_path, capsys):
+    """``experiments.planners --split holdout``: the scenes the adapted-HOPE checkpoint was trained without; a
+    NeuralParker checkpoint beside it that left out other scenes (none) is one error naming both."""
+    from hope_policy.checkpoint import save_hope_checkpoint
+    from np_policy.checkpoint import load_checkpoint
+    from np_sim.benchmarks import load_benchmark
+
+    payload = load_checkpoint("checkpoints/runs/factorial_hope_seed0/final.pt")
+    payload["config"]["holdout_every"] = 4
+    hope = save_hope_checkpoint(tmp_path / "hope.pt", payload)
+    result = main(["--benchmark", "factorial", "--methods", "hope", "--hope-checkpoint", str(hope), "--split",
+                   "holdout", "--starts-per-scene", "1", "--limit", "2", "--out", str(tmp_path / "out")])
+    train = load_benchmark("factorial", "train")
+    assert [r["scene"] for r in result["records"]] == [train[3].name, train[7].name]
+    assert json.loads((tmp_path / "out" / "config.json").read_text())["holdout_every"] == 4
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--benchmark", "factorial", "--methods", "hope", "neuralparker", "--hope-checkpoint", str(hope),
+              "--split", "holdout", "--limit", "1", "--out", str(tmp_path / "mixed")])
+    assert exit_info.value.code == 2
+    error = capsys.readouterr().err
+    assert "--split holdout: the checkpoints must all have been trained with the same holdout_every" in error
+    assert str(DEFAULT_CHECKPOINT) in error and str(hope) in error

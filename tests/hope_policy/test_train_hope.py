@@ -148,3 +148,19 @@ def test_collect_stores_the_takeover_chunk_on_takeover_steps_and_the_policy_acti
         obs = {k: torch.tensor(v[5]) for k, v in roll["obs"].items()}
         expected = trainer.model.distribution(obs).log_prob(torch.tensor(roll["action"][5])).sum(-1)
     np.testing.assert_allclose(roll["log_prob"][5], expected.numpy(), rtol=1e-6)
+
+
+def test_a_holdout_run_trains_without_every_kth_benchmark_scene():
+    """``holdout_every`` leaves the same scenes out as the NeuralParker trainer's (`np_policy.train.training_scenes`,
+    compared with the benchmark's own list); bad values are one error naming the field."""
+    from hope_policy.train import HopeTrainer
+    from np_sim.benchmarks import load_benchmark
+    from np_sim.errors import ConfigError
+
+    every = [s.name for s in load_benchmark("factorial", "train")]
+    trainer = HopeTrainer(tiny_config(holdout_every=4))
+    assert [s.name for s in trainer.envs.core.scenes] == [n for k, n in enumerate(every) if k % 4 != 3]
+    assert HopeTrainConfig.from_dict(tiny_config(holdout_every=4).to_dict()).holdout_every == 4
+    assert HopeTrainConfig.from_dict({}).holdout_every == 0  # a checkpoint written before the field
+    with pytest.raises(ConfigError, match=r"HopeTrainConfig.holdout_every: expected 0 or an integer >= 2, got 1"):
+        tiny_config(holdout_every=1)
