@@ -170,8 +170,7 @@ def test_a_finished_adapted_hope_run_is_read_from_final_pt_and_its_planner_recor
     (seed0 / "final.pt").write_bytes(b"")
     # records without the protocol in config.json were played with the mean action: refused, not mixed in
     assert measure(hope, runs, 1, False, {}).missing[0].endswith(
-        "was evaluated with the mean action, the report plays HOPE's sampled actions (move the folder aside to "
-        "re-evaluate)")
+        "was evaluated with the mean action, this row plays sampled actions (move the folder aside to re-evaluate)")
     (seed0 / "eval_factorial" / "config.json").write_text(json.dumps({"hope": {"action": "sampled", "seed": 0}}))
     measured = measure(hope, runs, 1, False, {})
     assert sorted(measured.records) == [0] and measured.seeds_text().startswith("1 of 3 (seed 0; seed 1: not trained")
@@ -195,6 +194,18 @@ def test_a_finished_adapted_hope_run_is_read_from_final_pt_and_its_planner_recor
     assert argv[1:] == ["-m", "experiments.planners", "--benchmark", "factorial", "--methods", "hope",
                         "--hope-checkpoint", str(seed0 / "final.pt"), "--hope-action", "sampled", "--out",
                         str(seed0 / "eval_factorial")]
+    # the mean-action rows (beyond the paper) read the same kind of folder with the other protocol
+    mean_arm = Arm("Adapted HOPE", "factorial_hope", "mean")
+    (seed0 / "eval_factorial_mean").mkdir()
+    (seed0 / "eval_factorial_mean" / "records.csv").write_text((seed0 / "eval_factorial" / "records.csv").read_text())
+    assert sorted(measure(mean_arm, runs, 1, False, {}).records) == [0]  # no protocol recorded: the mean action
+    (seed0 / "eval_factorial_mean" / "config.json").write_text(json.dumps({"hope": {"action": "sampled"}}))
+    assert measure(mean_arm, runs, 1, False, {}).missing[0].endswith("was evaluated with the sampled action, this "
+                                                                     "row plays mean actions (move the folder aside "
+                                                                     "to re-evaluate)")
+    argv = evaluation_argv(Arm("Hybrid A* → HOPE", "factorial_hope", "staged_mean"), runs[("factorial_hope", 0)],
+                           seed0 / "eval_factorial_staged_mean")
+    assert argv[argv.index("--methods") + 1] == "staged_astar_hope" and argv[argv.index("--hope-action") + 1] == "mean"
     assert epoch_hours(seed0 / "metrics.jsonl") == pytest.approx(3 * 60.0 / 3600)
     argv = evaluation_argv(Arm("Adapted HOPE", "factorial_hope", "validation"), runs[("factorial_hope", 0)],
                            seed0 / "eval_factorial_validation")
@@ -309,3 +320,13 @@ def test_paper_cli_refuses_bad_paths_with_one_error_line(capsys, argv, words):
 def test_case_clis_refuse_a_negative_seed_with_one_error_line(capsys):
     for module in (hermite_case, overview_case):
         assert "--start-seed" in one_error_line(capsys, module.main, ["--start-seed", "-1"])
+
+
+def test_the_paper_success_of_a_row_or_the_bound_its_bar_cohort_implies():
+    """Table II prints the staged HOPE row (0.686 ± 0.014); Fig. 3 is bars only, and its common-success cohorts of
+    773 / 748 / 790 of 1,080 starts bound the adapted HOPE's success from below (0.716, 0.693, 0.731)."""
+    from experiments.paper import paper_success
+    from experiments.paper_numbers import MAIN_COMPARISON, TWOSTAGE
+
+    assert paper_success(TWOSTAGE, "Hybrid A* → HOPE") == "0.686 ± 0.014"
+    assert paper_success(MAIN_COMPARISON, "Adapted HOPE") == "bars only; its cohort implies ≥ 0.72 / 0.69 / 0.73"
