@@ -194,10 +194,34 @@ def _violation(scene: Scene, segment: int, parameter: float, hit: np.ndarray) ->
                      position=(float(hit[2]), float(hit[3])))
 
 
+END_POSE_SLACK = 1e-6
+"""Rounding allowance on the success tolerances (m, and rad on the heading): the connector's edge candidates end
+exactly at them (0.1 m, 10°)."""
+
+
+def end_pose_error(scene: Scene, plan: Plan) -> tuple[float, float]:
+    """(distance in m, |heading difference| in rad) of ``plan``'s end pose from ``scene.target``: the last pose of
+    `Plan.sample` (the arcs integrated with eq:arc, then the Hermite cubic's end and end tangent, eq:hermite)."""
+    end = plan.sample(1.0)[-1, :3]
+    target = np.asarray(scene.target, float)
+    return float(np.hypot(*(end[:2] - target[:2]))), abs(math.remainder(float(end[2] - target[2]), 2 * math.pi))
+
+
+def ends_at_target(scene: Scene, plan: Plan, episode: EpisodeConfig | None = None) -> bool:
+    """``plan`` ends within the episode's success tolerances of the target (``END_POSE_SLACK`` for rounding):
+    the other half of a success, checked from the plan itself rather than from the planner's own flag."""
+    episode = EpisodeConfig() if episode is None else episode
+    distance, heading = end_pose_error(scene, plan)
+    return (distance <= episode.position_tolerance_m + END_POSE_SLACK
+            and heading <= math.radians(episode.heading_tolerance_deg) + END_POSE_SLACK)
+
+
 def plan_valid(scene: Scene, plan: Plan, rule: str, convention: Convention = "footprint",
                vehicle: VehicleSpec | None = None) -> bool:
-    """``validate_plan(...).valid`` for a successful plan; False for a failed one (nothing to validate)."""
-    return bool(plan.success) and validate_plan(scene, plan, rule, convention=convention, vehicle=vehicle).valid
+    """A successful plan that ends at the target (``ends_at_target``, the benchmarks' tolerances) and passes
+    ``validate_plan(...)``; False for a failed one (nothing to validate)."""
+    return (bool(plan.success) and ends_at_target(scene, plan)
+            and validate_plan(scene, plan, rule, convention=convention, vehicle=vehicle).valid)
 
 
 def validation_failure(scene: Scene, plan: Plan, convention: Convention, vehicle: VehicleSpec | None = None,

@@ -260,3 +260,38 @@ def test_the_scoring_rule_accepts_exactly_what_the_env_accepts(convention):
                 if term or trunc:
                     break
     assert outcomes == {(False, False), (True, False), (True, True)}  # collisions, free arcs, connected successes
+
+
+def _at(target) -> Scene:
+    scene = _scene(())
+    return Scene(boundary=scene.boundary, obstacles=(), target=np.asarray(target, float), start_region=None)
+
+
+def test_a_success_counts_only_when_the_plan_ends_within_the_tolerances_of_the_target():
+    """``ends_at_target`` / ``plan_valid``: a straight 5 m arc from the origin ends at (5, 0, 0); a quarter circle of
+    radius 4 (κ = 0.25, l = 2π; positive κ turns clockwise, θ = θ0 − κ|l|u) ends at (4, −4, −90°); the end is compared with targets moved by hand, at the
+    tolerances' edges (0.1 m, 10°: accepted) and beyond them."""
+    from np_sim.validate import end_pose_error, ends_at_target, plan_valid
+
+    straight = Plan(start=np.zeros(3), arcs=np.array([[0.0, 5.0]]), success=True)
+    quarter = Plan(start=np.zeros(3), arcs=np.array([[0.25, 2 * math.pi]]), success=True)
+    assert end_pose_error(_at([5.0, 0.0, 0.0]), straight) == pytest.approx((0.0, 0.0), abs=1e-12)
+    assert end_pose_error(_at([4.0, -4.0, -math.pi / 2]), quarter) == pytest.approx((0.0, 0.0), abs=1e-9)
+    assert ends_at_target(_at([5.1, 0.0, 0.0]), straight)  # 0.1 m: on the edge
+    assert not ends_at_target(_at([5.0, 0.2, 0.0]), straight)
+    assert ends_at_target(_at([4.0, -4.0, math.radians(-80.0)]), quarter)  # 10°: on the edge
+    assert not ends_at_target(_at([4.0, -4.0, math.radians(-101.0)]), quarter)
+    assert plan_valid(_at([5.0, 0.0, 0.0]), straight, "paper")
+    assert not plan_valid(_at([5.0, 0.5, 0.0]), straight, "paper")  # collision-free, but it does not park
+
+
+def test_the_end_pose_of_a_plan_with_a_hermite_segment_is_the_cubic_s_end_and_end_tangent():
+    """A reversing Hermite segment sampled from the straight cubic (5, 0) → (3, 0): the body drives backwards along
+    −x, so it ends at (3, 0) facing +x (heading 0)."""
+    from np_sim.validate import end_pose_error
+
+    t = np.linspace(0.0, 1.0, 100)
+    points = np.column_stack([5.0 - 2.0 * t, np.zeros_like(t)])
+    plan = Plan(start=np.zeros(3), arcs=np.array([[0.0, 5.0]]), success=True,
+                hermite=HermiteSegment(points=points, forward=False, length=2.0, delta_kappa=0.0))
+    assert end_pose_error(_at([3.0, 0.0, 0.0]), plan) == pytest.approx((0.0, 0.0), abs=1e-9)
