@@ -442,6 +442,10 @@ class NeuralParkerConfig:
     validation, is steerable (``weights.curvature_tolerance``) and keeps its footprint grown by this (m) off every
     obstacle along the whole path; otherwise the sampled and rescue rounds run as without it, the validated mean
     rollout among their candidates. None = always sample (best of all)."""
+    accept_aligned: bool = False
+    """Anytime play (with ``accept_mean_m``): the anytime test also requires the plan to end within
+    ``weights.heading_slack_deg`` of the target's heading, so a plan ending at the edge of the parking tolerance
+    (the connector's 80° and 100° candidates) goes to the sampled round, whose cost charges it."""
     mean_margin_m: float = 0.0
     """Anytime play (with ``accept_mean_m``): the mean rollout is first played in the env with the footprint grown by
     this on every side (m; the policy observes the grown body and the checks use it, so a success keeps about this
@@ -490,6 +494,11 @@ class NeuralParkerConfig:
                 continue
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ConfigError(f"NeuralParkerConfig.{name}: expected a finite number >= 0 m, got {value!r}")
+        if not isinstance(self.accept_aligned, bool):
+            raise ConfigError(f"NeuralParkerConfig.accept_aligned: expected true or false, got {self.accept_aligned!r}")
+        if self.accept_aligned and self.accept_mean_m is None:
+            raise ConfigError("NeuralParkerConfig.accept_aligned: a heading condition on the anytime test needs "
+                              "accept_mean_m (the anytime test), got None")
         if self.mean_margin_m and self.accept_mean_m is None:
             raise ConfigError(f"NeuralParkerConfig.mean_margin_m: a grown-body mean rollout ({self.mean_margin_m:g} m) "
                               "is an anytime answer; it needs accept_mean_m (the anytime test), got None")

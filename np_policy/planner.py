@@ -23,6 +23,7 @@ rollout's arc and connector checks and the validation of the plan see the whole 
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -186,12 +187,16 @@ class NeuralParkerPlanner:
         return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
 
     def accepted(self, scene: Scene, plan: Plan) -> bool:
-        """The validated ``plan`` succeeds, is steerable and keeps ``accept_mean_m`` of clearance (the anytime test)."""
+        """The validated ``plan`` succeeds, is steerable and keeps ``accept_mean_m`` of clearance (the anytime test);
+        with ``accept_aligned``, it also ends within the choice's heading slack of the target's heading."""
         if not plan.success:
             return False
-        margin = self.config.accept_mean_m
-        rows = plan.sample(self.config.weights.sample_ds_m)
-        return (steerable(rows, self.body, self.config.weights)
+        margin, weights = self.config.accept_mean_m, self.config.weights
+        rows = plan.sample(weights.sample_ds_m)
+        if self.config.accept_aligned and (abs(math.remainder(rows[-1, 2] - float(scene.target[2]), 2 * math.pi))
+                                           > math.radians(weights.heading_slack_deg)):
+            return False
+        return (steerable(rows, self.body, weights)
                 and path_valid(scene, rows[:, :3], "footprint", self.body.inflated(margin)))
 
     def grown_mean_rollout(self, scene: Scene, start) -> Plan | None:

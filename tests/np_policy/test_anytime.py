@@ -150,3 +150,24 @@ def test_where_the_grown_body_cannot_start_the_plain_anytime_answer_stands(plann
     np.testing.assert_array_equal(plan.arcs, reference.arcs)
     with pytest.raises(ConfigError, match=r"mean_margin_m: .* needs accept_mean_m"):
         dataclasses.replace(FOOTPRINT_BEST_OF_N, mean_margin_m=0.2)
+
+
+def test_with_accept_aligned_a_mean_rollout_ending_at_the_tolerance_edge_goes_to_the_sampled_round():
+    """Training clip 224: the anytime preset answers with a mean rollout that ends 10° off the target's heading
+    (the connector's 80°/100° candidate, on the parking tolerance's edge); with ``accept_aligned`` that plan is
+    refused and the sampled round answers with one ending on the target's heading. Clip 9's mean rollout ends
+    aligned and is still accepted. End poses from `np_sim.validate.end_pose_error`, not the planner."""
+    from np_sim.validate import end_pose_error
+
+    policy = Policy.load(CHECKPOINT)
+    small = dataclasses.replace(FOOTPRINT_ANYTIME, **SMALL)
+    plain, aligned = NeuralParkerPlanner(policy, small), NeuralParkerPlanner(policy, dataclasses.replace(
+        small, accept_aligned=True))
+    scene, start = _first_frame(224)
+    before, after = plain.plan(scene, start), aligned.plan(scene, start)
+    assert before.stage == "mean" and end_pose_error(scene, before)[1] == pytest.approx(np.radians(10.0), abs=1e-6)
+    assert after.stage == "sampled" and after.success and end_pose_error(scene, after)[1] < np.radians(5.0)
+    scene, start = _first_frame(9)
+    assert aligned.plan(scene, start).stage == "mean"
+    with pytest.raises(ConfigError, match=r"accept_aligned: .* needs accept_mean_m"):
+        NeuralParkerConfig(accept_aligned=True)

@@ -22,7 +22,9 @@ def load(*names: str) -> dict[str, dict]:
 def main() -> None:
     without = load("first94_without", "next94_without")
     variants = {"guarded, first park": load("first94_guarded_first_park", "next94_guarded_first_park"),
-                "guarded, aligned park first": load("all188_guarded_aligned")}
+                "guarded, aligned park first": load("all188_guarded_aligned"),
+                "anytime test requires an aligned end": load("all188_accept_aligned"),
+                "aligned end + guarded": load("all188_accept_aligned_guarded")}
     clips = list(without)
     print(f"without (the preset): {sum(int(without[c]['footprint_success']) for c in clips)} of {len(clips)}")
     for name, runs in variants.items():
