@@ -34,6 +34,7 @@ import numpy as np
 from np_policy.sampling import ChoiceWeights, PolicyRollouts, end_reason, hermite_of
 from np_sim.config import EnvConfig
 from np_sim.kernels import step as K
+from np_sim.kinematics import heading_gap
 from np_sim.plan import Plan
 from np_sim.scene import Scene
 
@@ -81,8 +82,8 @@ class GuardedRollout(PolicyRollouts):
     def _aligned(self, plans: list[Plan | None], target) -> np.ndarray:
         """Per row: it parked with its terminal heading within ``heading_slack_deg`` of the target's."""
         # the last sample is the plan's end pose at any spacing (the Hermite's end, t = 1): a coarse one is enough
-        return np.array([p is not None and abs(math.remainder(p.sample(1.0)[-1, 2] - float(target[2]), 2 * math.pi))
-                         <= self.heading_slack for p in plans])
+        return np.array([p is not None and heading_gap(p.sample(1.0)[-1, 2], target[2]) <= self.heading_slack
+                         for p in plans])
 
     def __call__(self, scene: Scene, start, seed=None) -> Plan:
         """The guarded rollout from ``start`` as one plan, successful or not (StartInCollisionError on a start in
@@ -106,6 +107,7 @@ class GuardedRollout(PolicyRollouts):
                 return parked[taken]
             arcs.append(actions[taken] * scale)
             if core.R[taken, K.R_TRUNCATED] > 0:
-                return Plan(start=start, arcs=np.array(arcs), hermite=None, success=False, reason=end_reason(core, taken))
+                return Plan(start=start, arcs=np.array(arcs), hermite=None, success=False,
+                            reason=end_reason(core, taken))
             core.copy_env(taken, rows)
             mean = np.asarray(self.actor.batch(core.obs[taken:taken + 1]), np.float64)[0]

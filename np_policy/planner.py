@@ -40,6 +40,7 @@ from np_policy.sampling import PolicyRollouts, choose, clearance_covers_sweep, c
 from np_sim.collision import path_valid
 from np_sim.config import EnvConfig
 from np_sim.errors import ConfigError, StartInCollisionError
+from np_sim.kinematics import heading_gap
 from np_sim.plan import Plan
 from np_sim.scene import Scene
 from np_sim.validate import validation_failure
@@ -193,8 +194,8 @@ class NeuralParkerPlanner:
             return False
         margin, weights = self.config.accept_mean_m, self.config.weights
         rows = plan.sample(weights.sample_ds_m)
-        if self.config.accept_aligned and (abs(math.remainder(rows[-1, 2] - float(scene.target[2]), 2 * math.pi))
-                                           > math.radians(weights.heading_slack_deg)):
+        if self.config.accept_aligned and heading_gap(rows[-1, 2], scene.target[2]) > math.radians(
+                weights.heading_slack_deg):
             return False
         return (steerable(rows, self.body, weights)
                 and path_valid(scene, rows[:, :3], "footprint", self.body.inflated(margin)))

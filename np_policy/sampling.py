@@ -30,6 +30,7 @@ from np_sim.collision import path_valid
 from np_sim.config import EnvConfig
 from np_sim.env_core import BatchCore
 from np_sim.frames import from_target_frame
+from np_sim.kinematics import heading_gap
 from np_sim.kernels import step as K
 from np_sim.plan import HermiteSegment, Plan
 from np_sim.scene import Scene
@@ -218,7 +219,7 @@ def plan_cost(plan: Plan, scene: Scene, vehicle: VehicleSpec, weights: ChoiceWei
     if level < 0:
         steps = sorted(weights.margins_m)
         level = -(steps[1] - steps[0]) if len(steps) > 1 else -weights.wanted_margin_m
-    heading_error = abs(math.remainder(rows[-1, 2] - float(scene.target[2]), 2 * math.pi))
+    heading_error = heading_gap(rows[-1, 2], scene.target[2])
     reversals = plan.metrics()[1]
     cost = (drive_length(rows, weights) + weights.reversal_weight * reversals
             + weights.clearance_weight * max(0.0, weights.wanted_margin_m - level)

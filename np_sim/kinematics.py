@@ -7,6 +7,8 @@ exactly by (−κ, −l).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from np_sim.kernels.kinematics import arc_point, sample_arc_into, wrap_angle
@@ -38,3 +40,8 @@ def sample_arc(pose, kappa: float, length: float, n: int = 30) -> np.ndarray:
 def steer_curvature(kappa, length):
     """Physical steering curvature c = −sgn(l)·κ (positive = left) of the arc (κ, l) (spec §2)."""
     return -np.sign(length) * np.asarray(kappa, dtype=float)
+
+
+def heading_gap(theta: float, target_theta: float) -> float:
+    """|θ − θ_target| wrapped to [0, π] (rad): how far a heading is from a target's, either way round."""
+    return abs(math.remainder(float(theta) - float(target_theta), 2.0 * math.pi))

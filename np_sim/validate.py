@@ -27,6 +27,7 @@ from np_sim.errors import ConfigError
 from np_sim.kernels import swept
 from np_sim.kernels.collision import arc_valid
 from np_sim.kernels.kinematics import arc_point
+from np_sim.kinematics import heading_gap
 from np_sim.plan import Plan, hermite_coefficients
 from np_sim.scene import CircleObstacle, PolygonObstacle, Scene
 from np_sim.scene_arrays import packed_scene
@@ -204,7 +205,7 @@ def end_pose_error(scene: Scene, plan: Plan) -> tuple[float, float]:
     `Plan.sample` (the arcs integrated with eq:arc, then the Hermite cubic's end and end tangent, eq:hermite)."""
     end = plan.sample(1.0)[-1, :3]
     target = np.asarray(scene.target, float)
-    return float(np.hypot(*(end[:2] - target[:2]))), abs(math.remainder(float(end[2] - target[2]), 2 * math.pi))
+    return float(np.hypot(*(end[:2] - target[:2]))), heading_gap(end[2], target[2])
 
 
 def ends_at_target(scene: Scene, plan: Plan, episode: EpisodeConfig | None = None) -> bool:

@@ -309,3 +309,12 @@ def test_wrap_angle_range_and_congruence(a):
     assert -PI < w <= PI
     k = (a - w) / (2 * PI)
     assert abs(k - round(k)) <= 1e-9 * max(1.0, abs(a))
+
+
+def test_the_heading_gap_is_the_shorter_way_round():
+    from np_sim.kinematics import heading_gap
+
+    assert heading_gap(3.1, -3.1) == pytest.approx(2 * math.pi - 6.2)  # across ±π: 0.083 rad, not 6.2
+    assert heading_gap(-0.5, 0.25) == pytest.approx(0.75)
+    assert heading_gap(math.radians(370.0), math.radians(-10.0)) == pytest.approx(math.radians(20.0))
+    assert heading_gap(0.0, math.pi) == pytest.approx(math.pi)

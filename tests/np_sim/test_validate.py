@@ -269,8 +269,8 @@ def _at(target) -> Scene:
 
 def test_a_success_counts_only_when_the_plan_ends_within_the_tolerances_of_the_target():
     """``ends_at_target`` / ``plan_valid``: a straight 5 m arc from the origin ends at (5, 0, 0); a quarter circle of
-    radius 4 (κ = 0.25, l = 2π; positive κ turns clockwise, θ = θ0 − κ|l|u) ends at (4, −4, −90°); the end is compared with targets moved by hand, at the
-    tolerances' edges (0.1 m, 10°: accepted) and beyond them."""
+    radius 4 (κ = 0.25, l = 2π; positive κ turns clockwise, θ = θ0 − κ|l|u) ends at (4, −4, −90°); the end is
+    compared with targets moved by hand, at the tolerances' edges (0.1 m, 10°: accepted) and beyond them."""
     from np_sim.validate import end_pose_error, ends_at_target, plan_valid
 
     straight = Plan(start=np.zeros(3), arcs=np.array([[0.0, 5.0]]), success=True)
