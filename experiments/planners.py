@@ -18,8 +18,8 @@ checkpoint's convention) or do not end within the target's tolerances (`np_sim.v
 the plan itself; every validity column requires it). ``--vehicle`` plans for another vehicle (`np_sim.vehicle`:
 the searches' footprint and κ_max, the validators' footprint; a learned planner's checkpoint must have been trained
 for it); the frozen starts were drawn for the default car, so each record says whether the vehicle's footprint
-at its start is free (``start_footprint_free``) and the table counts those that are not. Writes ``records.csv``/``records.json`` (one
-row per episode and method), ``table.md`` and ``config.json`` into the run folder. Each finished episode is kept
+at its start is free (``start_footprint_free``) and the table counts those that are not. Writes ``records.csv``/
+``records.json`` (one row per episode and method), ``table.md`` and ``config.json`` into the run folder. Each finished episode is kept
 in the folder as the run goes (`experiments.progress`): after a kill, ``--resume`` with the same arguments and
 ``--out`` plans only the episodes that were not finished, and the records equal an uninterrupted run's.
 

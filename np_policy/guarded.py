@@ -34,9 +34,9 @@ import numpy as np
 from np_policy.sampling import ChoiceWeights, PolicyRollouts, end_reason, hermite_of
 from np_sim.config import EnvConfig
 from np_sim.kernels import step as K
-from np_sim.kinematics import heading_gap
 from np_sim.plan import Plan
 from np_sim.scene import Scene
+from np_sim.validate import end_pose_error
 
 GUARD_DIRECTIONS = ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (1.0, 1.0), (1.0, -1.0), (-1.0, 1.0),
                     (-1.0, -1.0))
@@ -79,11 +79,9 @@ class GuardedRollout(PolicyRollouts):
         return [Plan(start=start, arcs=np.array([*arcs, actions[row] * scale]), hermite=hermite_of(core, row, scene),
                      success=True, reason="") if core.R[row, K.R_SUCCESS] > 0 else None for row in range(self.n)]
 
-    def _aligned(self, plans: list[Plan | None], target) -> np.ndarray:
+    def _aligned(self, plans: list[Plan | None], scene: Scene) -> np.ndarray:
         """Per row: it parked with its terminal heading within ``heading_slack_deg`` of the target's."""
-        # the last sample is the plan's end pose at any spacing (the Hermite's end, t = 1): a coarse one is enough
-        return np.array([p is not None and heading_gap(p.sample(1.0)[-1, 2], target[2]) <= self.heading_slack
-                         for p in plans])
+        return np.array([p is not None and end_pose_error(scene, p)[1] <= self.heading_slack for p in plans])
 
     def __call__(self, scene: Scene, start, seed=None) -> Plan:
         """The guarded rollout from ``start`` as one plan, successful or not (StartInCollisionError on a start in
@@ -99,7 +97,7 @@ class GuardedRollout(PolicyRollouts):
             actions = np.clip(mean + self.offsets, -1.0, 1.0)
             core.step(actions)
             parked = self._plans(core, scene, start, arcs, actions, scale)
-            taken = guard_choice(core.R, self._aligned(parked, scene.target))
+            taken = guard_choice(core.R, self._aligned(parked, scene))
             if taken is None:
                 return Plan(start=start, arcs=np.array([*arcs, actions[0] * scale]), hermite=None, success=False,
                             reason="collision")

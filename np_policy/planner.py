@@ -103,6 +103,15 @@ def planning_env(policy: Policy, config: NeuralParkerConfig) -> EnvConfig:
     return env
 
 
+def _unless_start_collides(rollout) -> Plan | None:
+    """``rollout()``'s plan, or None where the body it rolls out starts in collision (a grown body can where the
+    real one does not)."""
+    try:
+        return rollout()
+    except StartInCollisionError:
+        return None
+
+
 class NeuralParkerPlanner:
     """A trained policy as a planner (module docstring); follows `np_sim.planners.protocol.Planner`."""
 
@@ -203,29 +212,22 @@ class NeuralParkerPlanner:
     def grown_mean_rollout(self, scene: Scene, start) -> Plan | None:
         """The mean rollout played with the footprint grown by ``mean_margin_m`` (not validated), or None without
         one or where the grown body's start is in collision."""
-        if self.grown_mean is None:
-            return None
-        try:
-            return self.grown_mean(scene, start)[0]
-        except StartInCollisionError:
-            return None
+        return _unless_start_collides(lambda: self.grown_mean(scene, start)[0]) if self.grown_mean else None
 
     def grown_answer(self, scene: Scene, start) -> tuple[Plan | None, bool]:
         """(the grown-body mean rollout, validated with the real body, or None; whether the anytime test accepts
         it)."""
-        grown = self.grown_mean_rollout(scene, start)
-        return (None, False) if grown is None else self._anytime_answer(scene, grown)
+        return self._anytime_answer_of(scene, self.grown_mean_rollout(scene, start))
 
     def guarded_answer(self, scene: Scene, start) -> tuple[Plan | None, bool]:
         """(the guarded rollout (`np_policy.guarded`), validated with the real body, or None without one or where
         its body's start is in collision; whether the anytime test accepts it)."""
-        if self.guarded is None:
-            return None, False
-        try:
-            plan = self.guarded(scene, start)
-        except StartInCollisionError:
-            return None, False
-        return self._anytime_answer(scene, plan)
+        plan = _unless_start_collides(lambda: self.guarded(scene, start)) if self.guarded else None
+        return self._anytime_answer_of(scene, plan)
+
+    def _anytime_answer_of(self, scene: Scene, plan: Plan | None) -> tuple[Plan | None, bool]:
+        """``_anytime_answer`` of ``plan``, or (None, False) without one."""
+        return (None, False) if plan is None else self._anytime_answer(scene, plan)
 
     def _anytime_answer(self, scene: Scene, plan: Plan) -> tuple[Plan, bool]:
         """(``plan`` validated, whether the anytime test accepts it); an accepted plan is not validated a second

@@ -37,8 +37,6 @@ def first_frames():
     return frames
 
 
-
-
 @pytest.fixture(scope="module")
 def planners():
     policy = Policy.load(CHECKPOINT)
