@@ -12,12 +12,11 @@ from hypothesis import strategies as st
 from shapely.geometry import Polygon as ShapelyPolygon
 
 from clearance_oracle import shapely_clearance  # tests/clearance_oracle.py
+from clip_frames import first_frame  # tests/clip_frames.py
 from np_policy.config import FOOTPRINT_ANYTIME, FOOTPRINT_BEST_OF_N, PRESETS, NeuralParkerConfig
 from np_policy.planner import NeuralParkerPlanner, Policy
-from np_sim.clips.generation import generate_clip
 from np_sim.errors import ConfigError
 from np_sim.validate import validation_failure
-from tracking.perception import perceived_scene
 
 CHECKPOINT = Path("checkpoints/site_np_footprint.pt")
 TRAIN_SEEDS = (9, 10)
@@ -29,12 +28,7 @@ SMALL = {"samples": 4, "rescue": ((8, 2.0, "policy"),)}
 
 @pytest.fixture(scope="module")
 def first_frames():
-    frames = []
-    for seed in TRAIN_SEEDS:
-        clip = generate_clip(seed)
-        start = np.asarray(clip.start, float)
-        frames.append((perceived_scene(clip, 0, pose=start), start))
-    return frames
+    return [first_frame(seed) for seed in TRAIN_SEEDS]
 
 
 @pytest.fixture(scope="module")
@@ -117,18 +111,13 @@ def test_clearance_at_samples_covers_the_body_between_them(kappa, ds, theta, gea
         assert covered.covers(ShapelyPolygon(body.footprint(arc_point(*start, kappa, gear * ds * f))))
 
 
-def _first_frame(seed):
-    clip = generate_clip(seed)
-    start = np.asarray(clip.start, float)
-    return perceived_scene(clip, 0, pose=start), start
-
 
 def test_the_grown_body_mean_rollout_answers_first_and_keeps_the_clearance_with_the_real_body(planners):
     """Training clip 39 (never a held-out one): the plain mean rollout parks with under 0.1 m to spare, the mean
     rollout played with the body grown by 0.2 m keeps 0.2 m and answers the call; shapely measures the real body."""
     anytime, _ = planners
     grown = NeuralParkerPlanner(anytime.policy, dataclasses.replace(anytime.config, mean_margin_m=0.2))
-    scene, start = _first_frame(39)
+    scene, start = first_frame(39)
     assert anytime.plan(scene, start).stage != "mean"
     plan = grown.plan(scene, start)
     assert plan.stage == "mean" and plan.success
@@ -141,7 +130,7 @@ def test_where_the_grown_body_cannot_start_the_plain_anytime_answer_stands(plann
     """Training clip 35 starts closer than 0.2 m to an object: no grown-body rollout, the same answer as without."""
     anytime, _ = planners
     grown = NeuralParkerPlanner(anytime.policy, dataclasses.replace(anytime.config, mean_margin_m=0.2))
-    scene, start = _first_frame(35)
+    scene, start = first_frame(35)
     assert grown.grown_mean_rollout(scene, start) is None
     plan, reference = grown.plan(scene, start), anytime.plan(scene, start)
     assert plan.stage == reference.stage
@@ -161,11 +150,11 @@ def test_with_accept_aligned_a_mean_rollout_ending_at_the_tolerance_edge_goes_to
     small = dataclasses.replace(FOOTPRINT_ANYTIME, **SMALL)
     plain, aligned = NeuralParkerPlanner(policy, small), NeuralParkerPlanner(policy, dataclasses.replace(
         small, accept_aligned=True))
-    scene, start = _first_frame(224)
+    scene, start = first_frame(224)
     before, after = plain.plan(scene, start), aligned.plan(scene, start)
     assert before.stage == "mean" and end_pose_error(scene, before)[1] == pytest.approx(np.radians(10.0), abs=1e-6)
     assert after.stage == "sampled" and after.success and end_pose_error(scene, after)[1] < np.radians(5.0)
-    scene, start = _first_frame(9)
+    scene, start = first_frame(9)
     assert aligned.plan(scene, start).stage == "mean"
     with pytest.raises(ConfigError, match=r"accept_aligned: .* needs accept_mean_m"):
         NeuralParkerConfig(accept_aligned=True)

@@ -7,17 +7,16 @@ import numpy as np
 import pytest
 
 from clearance_oracle import shapely_clearance  # tests/clearance_oracle.py
+from clip_frames import first_frame  # tests/clip_frames.py
 from np_policy.config import FOOTPRINT_ANYTIME, NeuralParkerConfig
 from np_policy.guarded import GUARD_DIRECTIONS, guard_choice, guard_offsets
 from np_policy.planner import NeuralParkerPlanner, Policy
 from np_policy.sampling import hermite_of
-from np_sim.clips.generation import generate_clip
 from np_sim.env_core import BatchCore
 from np_sim.errors import ConfigError
 from np_sim.kernels import step as K
 from np_sim.plan import hermite_coefficients
 from np_sim.validate import validation_failure
-from tracking.perception import perceived_scene
 
 CHECKPOINT = "checkpoints/site_np_footprint.pt"
 GUARDED_SEEDS = (10, 23, 73)
@@ -30,11 +29,6 @@ GUARDED = dataclasses.replace(FOOTPRINT_ANYTIME, guard_sigmas=(1.0, 2.0, 3.0))
 """The anytime preset with the guarded rollout at 1, 2 and 3 σ (measured on training clips, not adopted:
 docs/best_of_n.md, 2026-12-06)."""
 
-
-def _first_frame(seed):
-    clip = generate_clip(seed)
-    start = np.asarray(clip.start, float)
-    return perceived_scene(clip, 0, pose=start), start
 
 
 @pytest.fixture(scope="module")
@@ -91,7 +85,7 @@ def test_every_arc_of_the_guarded_rollout_follows_its_rule_replayed_in_single_en
     """Each taken arc, replayed with every row of the star stepped alone: it is the first aligned park, else the
     first free row, else the first park; the mean is the compiled actor's at the replayed state. Independent of the
     batched branching and of ``BatchCore.copy_env``."""
-    scene, start = _first_frame(seed)
+    scene, start = first_frame(seed)
     guarded = planner.guarded
     config = guarded.config
     plan = guarded(scene, start)
@@ -112,7 +106,7 @@ def test_every_arc_of_the_guarded_rollout_follows_its_rule_replayed_in_single_en
 
 @pytest.mark.parametrize("seed", GUARDED_SEEDS)
 def test_the_planner_answers_with_the_guarded_rollout_where_the_grown_mean_rollout_fails(planner, seed):
-    scene, start = _first_frame(seed)
+    scene, start = first_frame(seed)
     assert not planner.grown_answer(scene, start)[1]
     plan = planner.plan(scene, start)
     assert plan.stage == "guarded" and plan.success
@@ -125,7 +119,7 @@ def test_without_guard_sigmas_the_planner_is_the_anytime_planner_before(planner)
     """A frame the guarded rollout answers goes to the sampled rounds without it (the preset's default)."""
     plain = NeuralParkerPlanner(planner.policy, FOOTPRINT_ANYTIME)
     assert plain.guarded is None
-    scene, start = _first_frame(GUARDED_SEEDS[0])
+    scene, start = first_frame(GUARDED_SEEDS[0])
     assert plain.plan(scene, start).stage in ("sampled", "rescue")
 
 

@@ -6,13 +6,12 @@ import dataclasses
 import numpy as np
 import pytest
 
+from clip_frames import first_frame  # tests/clip_frames.py
 from np_policy.config import FOOTPRINT_ANYTIME, NeuralParkerConfig
 from np_policy.inference import CompiledActor
 from np_policy.planner import NeuralParkerPlanner, Policy, planning_env, rollout_env
 from np_policy.sampling import PolicyRollouts, clearance_level
-from np_sim.clips.generation import generate_clip
 from np_sim.errors import ConfigError
-from tracking.perception import perceived_scene
 
 CHECKPOINT = "checkpoints/site_np_footprint.pt"
 
@@ -22,18 +21,12 @@ def policy():
     return Policy.load(CHECKPOINT)
 
 
-def _first_frame(seed: int):
-    """The scene and start of the closed loop's first call on training clip ``seed`` (``train-<seed>``)."""
-    clip = generate_clip(seed)
-    start = np.asarray(clip.start, float)
-    return perceived_scene(clip, 0, pose=start), start
-
 
 def test_an_arc_budget_cuts_only_the_rollouts_that_run_past_it(policy):
     """Under a budget of K arcs every rollout that ends within K arcs is the rollout of the full budget, arc for
     arc; every longer one ends after its first K arcs as a timeout. Training clip 60 at 2 σ, seed 7: rollouts of 1
     to 8 arcs, successes on both sides of K = 4."""
-    scene, start = _first_frame(60)
+    scene, start = first_frame(60)
     env = planning_env(policy, FOOTPRINT_ANYTIME)
     actor, std = CompiledActor(policy.model.eval()), 2.0 * policy.model.log_std.detach().exp().numpy()
     full = PolicyRollouts(actor, std, env, 16, 7)(scene, start)
@@ -84,7 +77,7 @@ def test_the_rescue_rounds_stop_after_the_first_round_whose_plan_keeps_the_stop_
     at 0.1 m and the preset runs all three rounds, to 0.2 m; with the stop at 0 or 0.1 m one round runs and the
     answer is the one-round preset's. Training clip 37's: the first two rescue rounds find no plan, so with the stop
     at 0 all three run and the answer is the preset's."""
-    scene, start = _first_frame(60)
+    scene, start = first_frame(60)
     full, ran = _rounds_run(policy, FOOTPRINT_ANYTIME, scene, start)
     expected = NeuralParkerPlanner(policy, _rounds(1)).plan(scene, start)
     body = policy.train.env.vehicle
@@ -94,7 +87,7 @@ def test_the_rescue_rounds_stop_after_the_first_round_whose_plan_keeps_the_stop_
         plan, ran = _rounds_run(policy, dataclasses.replace(FOOTPRINT_ANYTIME, rescue_stop_m=stop), scene, start)
         assert ran == [0] and plan.stage == "rescue"
         np.testing.assert_array_equal(plan.arcs, expected.arcs)
-    scene, start = _first_frame(37)
+    scene, start = first_frame(37)
     assert not NeuralParkerPlanner(policy, _rounds(2)).plan(scene, start).success
     plan, ran = _rounds_run(policy, dataclasses.replace(FOOTPRINT_ANYTIME, rescue_stop_m=0.0), scene, start)
     reference = NeuralParkerPlanner(policy, FOOTPRINT_ANYTIME).plan(scene, start)
