@@ -59,6 +59,7 @@ from tqdm import tqdm
 from experiments.common import first, run_folder, write_records
 from experiments.overrides import apply_overrides
 from experiments.registry import PlannerOptions, build_planners, check_names, label
+from np_policy.config import NeuralParkerConfig
 from np_sim.cli import cli_boundary, fresh_folder, positive_int, vehicle_spec
 from np_sim.errors import ConfigError
 from np_sim.plan import PLAN_STAGES
@@ -230,18 +231,33 @@ def planner_notes(names: list[str], config: ClosedLoopConfig) -> list[str]:
     if config.clip_run.stitch:
         notes.append("Stitched replanning (clip_run.stitch): a moving vehicle's replan starts from the pose ahead on "
                      "its followed plan where it can still stop, and it drives that plan up to there.")
-    footprint = config.planner.neuralparker_footprint
-    if "neuralparker_footprint" not in names:
-        return notes
+    if "neuralparker_footprint" in names:
+        notes += footprint_notes(config.planner.neuralparker_footprint)
+    return notes
+
+
+def footprint_notes(footprint: NeuralParkerConfig) -> list[str]:
+    """The table's notes on how the footprint row plays its policy (its `NeuralParkerConfig`)."""
+    notes = []
     if footprint.accept_mean_m is not None:
         grown = (f", played first with the body grown by {footprint.mean_margin_m:g} m, then as is "
                  f"(planner.neuralparker_footprint.mean_margin_m)" if footprint.mean_margin_m else "")
         guarded = (f" (before the plain one, the guarded mean rollout: each arc the first of the mean action and "
                    f"offsets at {', '.join(f'{s:g}' for s in footprint.guard_sigmas)} σ that parks aligned, else does "
                    f"not collide; planner.neuralparker_footprint.guard_sigmas)" if footprint.guard_sigmas else "")
+        aligned = (f" and ends within {footprint.weights.heading_slack_deg:g}° of the target's heading "
+                   f"(planner.neuralparker_footprint.accept_aligned)" if footprint.accept_aligned else "")
         notes.append(f"NeuralParker (footprint) returns its mean rollout{grown}{guarded}{',' if grown else ''} at once "
                      f"when that succeeds, is steerable and keeps {footprint.accept_mean_m:g} m of clearance "
-                     f"(planner.neuralparker_footprint.accept_mean_m); otherwise:")
+                     f"(planner.neuralparker_footprint.accept_mean_m){aligned}; otherwise:")
+        if footprint.search_margin_m is not None:
+            notes.append(f"it searches with Hybrid A* for the body grown by {footprint.search_margin_m:g} m "
+                         f"(footprint convention, at most {footprint.search_max_expanded} expansions; "
+                         f"planner.neuralparker_footprint.search_margin_m) and returns that plan when it passes the "
+                         f"same test; otherwise:")
+        if footprint.start_limited_clearance:
+            notes.append("(The clearance asked of a call's plans is at most its start pose's: "
+                         "planner.neuralparker_footprint.start_limited_clearance.)")
     if footprint.samples:
         notes.append(f"NeuralParker (footprint) plays the best of its mean rollout and {footprint.samples} sampled "
                      f"rollouts (np_policy.sampling; planner.neuralparker_footprint.samples=0 = the paper's planner).")
@@ -401,7 +417,7 @@ def call_table(records: list[dict], names: list[str]) -> list[str]:
     """Markdown lines: per method, every planner call's plan time (median, 90th percentile) and, for a
     staged-effort planner, how many calls each stage answered and their median time."""
     lines = ["| Method | Planner calls | Plan time, all calls: median / p90 (ms) | Calls answered by the mean "
-             "rollout / the guarded rollout / the sampled round / the rescue rounds (median ms) |", "|---|---|---|---|"]
+             "rollout / the guarded rollout / the search / the sampled round / the rescue rounds (median ms) |", "|---|---|---|---|"]
     for name in names:
         rows = [r for r in records if r["planner"] == name]
         times = np.array([t for r in rows for t in r["plan_times_ms"]])

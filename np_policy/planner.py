@@ -42,6 +42,7 @@ from np_sim.config import EnvConfig
 from np_sim.errors import ConfigError, StartInCollisionError
 from np_sim.kinematics import heading_gap
 from np_sim.plan import Plan
+from np_sim.planners import HybridAStar, HybridAStarConfig
 from np_sim.scene import Scene
 from np_sim.validate import validation_failure
 from np_sim.vehicle import VehicleSpec
@@ -112,6 +113,18 @@ def _unless_start_collides(rollout) -> Plan | None:
         return None
 
 
+SEARCH_TIME_BUDGET_S = 3600.0
+"""Wall-time budget of the anytime search (``search_fallback``): never reached, its node budget stops it first."""
+
+
+def search_fallback(body: VehicleSpec, config: NeuralParkerConfig, margin_m: float) -> HybridAStar:
+    """The anytime search of ``config.search_margin_m``: footprint convention, ``body`` grown by ``margin_m``, the
+    node budget ``config.search_max_expanded``."""
+    search = HybridAStarConfig(vehicle=body.inflated(margin_m), max_expanded=config.search_max_expanded,
+                               time_budget_s=SEARCH_TIME_BUDGET_S)
+    return HybridAStar(search, convention="footprint")
+
+
 class NeuralParkerPlanner:
     """A trained policy as a planner (module docstring); follows `np_sim.planners.protocol.Planner`."""
 
@@ -139,18 +152,14 @@ class NeuralParkerPlanner:
                         if config.samples else None)
         self.guarded = (GuardedRollout(self.actor, std, grown if grown is not None else capped, config.guard_sigmas,
                                        nearest, config.weights.heading_slack_deg) if config.guard_sigmas else None)
+        self.searches: dict[float, HybridAStar] = {}
+        """The anytime searches by footprint margin (``search_at``)."""
         self.single = (PolicyRollouts(self.actor, std, self.env_config, 1, config.seed, nearest=nearest)
                        if config.action == "sample" else None)
         self.rescue = [PolicyRollouts(self.actor, std * scale, capped, n, config.seed + 1 + k, first_arc, nearest)
                        for k, (n, scale, first_arc) in enumerate(config.rescue)]
-        weights = config.weights
         # Twice the steerable bound: the Hermite segment's curvature is known only at its samples.
-        kappa_limit = 2.0 * (1.0 + weights.curvature_tolerance) * self.body.kappa_max
-        self.accept_implies_valid = (config.accept_mean_m is not None and self.convention == "footprint"
-                                     and clearance_covers_sweep(self.body, config.accept_mean_m,
-                                                                weights.sample_ds_m, kappa_limit))
-        """The anytime test (``accepted``) implies the claim check (``claimed``), so an accepted mean rollout is
-        not validated a second time (`np_policy.sampling.clearance_covers_sweep`)."""
+        self.kappa_limit = 2.0 * (1.0 + config.weights.curvature_tolerance) * self.body.kappa_max
 
     @classmethod
     def from_checkpoint(cls, path: str | Path, config: NeuralParkerConfig | str = PAPER,
@@ -166,9 +175,9 @@ class NeuralParkerPlanner:
         ``samples``, the best of that and the sampled rollouts (``np_policy.sampling.choose``), then the rescue
         rounds while the best fails or keeps too little clearance (``_rescue_wanted_m``), unless ``accept_mean_m``
         accepts the mean rollout first (with ``mean_margin_m``, the grown-body mean rollout before the plain one;
-        with ``guard_sigmas``, the guarded rollout between them); with ``action='sample'``, one rollout of sampled
-        actions. ``Plan.stage`` names the stage that gave the plan: 'mean' (either mean rollout), 'guarded',
-        'sampled' or 'rescue'."""
+        with ``guard_sigmas``, the guarded rollout between them; with ``search_margin_m``, the grown-body search
+        after them); with ``action='sample'``, one rollout of sampled actions. ``Plan.stage`` names the stage that
+        gave the plan: 'mean' (either mean rollout), 'guarded', 'search', 'sampled' or 'rescue'."""
         t0 = time.perf_counter()
         if self.single is not None:
             plan = self.claimed(scene, self.single(scene, start, seed=query_seed(self.config.seed, start))[0])
@@ -180,15 +189,19 @@ class NeuralParkerPlanner:
         guarded, answered = self.guarded_answer(scene, start)
         if answered:
             return dataclasses.replace(guarded, plan_time_s=time.perf_counter() - t0, stage="guarded")
-        plan, stage = self._mean_rollout(scene, start), "mean"
+        plan, stage, searched = self._mean_rollout(scene, start), "mean", None
         if anytime:
             plan, answered = self._anytime_answer(scene, plan)
             if answered:
                 return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
+            searched, answered = self.search_answer(scene, start)
+            if answered:
+                return dataclasses.replace(searched, plan_time_s=time.perf_counter() - t0, stage="search")
         elif self.sampled is None:
             plan = self.claimed(scene, plan)
         if self.sampled is not None:
-            candidates = [plan, *(p for p in (grown, guarded) if p is not None), *self.sampled(scene, start)]
+            earlier = (p for p in (grown, guarded, searched) if p is not None)
+            candidates = [plan, *earlier, *self.sampled(scene, start)]
             plan, stage = self._choose_claimed(scene, candidates, anytime), "sampled"
         for k, rounds in enumerate(self.rescue):
             if plan.success and not self._too_close(scene, plan, self._rescue_wanted_m(k)):
@@ -197,11 +210,13 @@ class NeuralParkerPlanner:
         return dataclasses.replace(plan, plan_time_s=time.perf_counter() - t0, stage=stage)
 
     def accepted(self, scene: Scene, plan: Plan) -> bool:
-        """The validated ``plan`` succeeds, is steerable and keeps ``accept_mean_m`` of clearance (the anytime test);
-        with ``accept_aligned``, it also ends within the choice's heading slack of the target's heading."""
+        """The validated ``plan`` succeeds, is steerable and keeps ``accept_mean_m`` of clearance (the anytime test;
+        with ``start_limited_clearance`` at most its start's, ``start_limited``); with ``accept_aligned``, it also
+        ends within the choice's heading slack of the target's heading."""
         if not plan.success:
             return False
-        margin, weights = self.config.accept_mean_m, self.config.weights
+        margin = self.start_limited(scene, plan.start, self.config.accept_mean_m)
+        weights = self.config.weights
         rows = plan.sample(weights.sample_ds_m)
         if self.config.accept_aligned and heading_gap(rows[-1, 2], scene.target[2]) > math.radians(
                 weights.heading_slack_deg):
@@ -225,6 +240,36 @@ class NeuralParkerPlanner:
         plan = _unless_start_collides(lambda: self.guarded(scene, start)) if self.guarded else None
         return self._anytime_answer_of(scene, plan)
 
+    def search_answer(self, scene: Scene, start) -> tuple[Plan | None, bool]:
+        """(the grown-body Hybrid A* plan (``search_margin_m``, with ``start_limited_clearance`` at most the start's
+        clearance), validated with the real body, or None without a search; whether the anytime test accepts it)."""
+        if self.config.search_margin_m is None:
+            return None, False
+        margin = self.start_limited(scene, start, self.config.search_margin_m)
+        return self._anytime_answer(scene, self.search_at(margin).plan(scene, start))
+
+    def search_at(self, margin_m: float) -> HybridAStar:
+        """The anytime search for the footprint grown by ``margin_m`` (`search_fallback`), built once per margin."""
+        if margin_m not in self.searches:
+            self.searches[margin_m] = search_fallback(self.body, self.config, margin_m)
+        return self.searches[margin_m]
+
+    def start_limited(self, scene: Scene, start, wanted_m: float) -> float:
+        """``wanted_m``, or with ``start_limited_clearance`` at most the clearance level of the ``start`` pose (the
+        ``weights.margins_m`` ladder, 0 below its lowest rung): no path from there keeps more."""
+        if not self.config.start_limited_clearance or wanted_m <= 0.0:
+            return wanted_m
+        pose = np.asarray(start, float)[None, :3]
+        return min(wanted_m, max(0.0, clearance_level(scene, pose, self.body, self.config.weights.margins_m)))
+
+    def accept_implies_valid(self, scene: Scene, plan: Plan) -> bool:
+        """Whether the anytime test (``accepted``) of ``plan`` implies the claim check (``claimed``), so that an
+        accepted plan is not validated a second time (`np_policy.sampling.clearance_covers_sweep`)."""
+        if self.config.accept_mean_m is None or self.convention != "footprint":
+            return False
+        margin = self.start_limited(scene, plan.start, self.config.accept_mean_m)
+        return clearance_covers_sweep(self.body, margin, self.config.weights.sample_ds_m, self.kappa_limit)
+
     def _anytime_answer_of(self, scene: Scene, plan: Plan | None) -> tuple[Plan | None, bool]:
         """``_anytime_answer`` of ``plan``, or (None, False) without one."""
         return (None, False) if plan is None else self._anytime_answer(scene, plan)
@@ -232,7 +277,7 @@ class NeuralParkerPlanner:
     def _anytime_answer(self, scene: Scene, plan: Plan) -> tuple[Plan, bool]:
         """(``plan`` validated, whether the anytime test accepts it); an accepted plan is not validated a second
         time where the test implies the rule (``accept_implies_valid``)."""
-        if self.accept_implies_valid:
+        if self.accept_implies_valid(scene, plan):
             if self.accepted(scene, plan):
                 return plan, True
             return self.claimed(scene, plan), False
@@ -275,7 +320,9 @@ class NeuralParkerPlanner:
         return self.config.rescue_clearance_m if k == 0 or stop is None else stop
 
     def _too_close(self, scene: Scene, plan: Plan, clearance_m: float) -> bool:
-        """The plan's clearance level (the ``weights.margins_m`` ladder) is below ``clearance_m``; never for 0."""
+        """The plan's clearance level (the ``weights.margins_m`` ladder) is below ``clearance_m`` (``start_limited``);
+        never for 0."""
+        clearance_m = self.start_limited(scene, plan.start, clearance_m)
         if clearance_m <= 0.0:
             return False
         weights = self.config.weights

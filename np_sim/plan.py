@@ -31,10 +31,10 @@ class HermiteSegment:
     """Δκ_H of eq:hermite-kappa (1/m)."""
 
 
-PLAN_STAGES = ("mean", "guarded", "sampled", "rescue")
+PLAN_STAGES = ("mean", "guarded", "search", "sampled", "rescue")
 """Stages of a staged-effort planner, cheapest first (``Plan.stage``; `np_policy.planner`): the mean rollout
-accepted, the guarded mean rollout accepted (`np_policy.guarded`), the best of the sampled round, the best after the
-rescue rounds."""
+accepted, the guarded mean rollout accepted (`np_policy.guarded`), the grown-body Hybrid A* plan accepted
+(``NeuralParkerConfig.search_margin_m``), the best of the sampled round, the best after the rescue rounds."""
 
 
 @dataclass(frozen=True, eq=False)

@@ -177,7 +177,7 @@ def test_set_overrides_any_field_by_its_path_and_names_a_bad_one():
            "planner.neuralparker_footprint.samples=-1": r"NeuralParkerConfig.samples: expected an integer >= 0",
            "planner.neuralparker_footprint.samples=2.5": r"NeuralParkerConfig.samples: expected an integer, got 2.5",
            "planner.neuralparker_footprint=best": r"expected a preset name, one of \['footprint_anytime', "
-                                                  r"'footprint_best_of_n', 'paper'\]",
+                                                  r"'footprint_best_of_n', 'footprint_search', 'paper'\]",
            "clip_run=1": r"ClosedLoopConfig.clip_run: a group of settings; set one of its fields",
            "controller=pid": r"ClosedLoopConfig.controller: expected one of \['lqr', ",
            "clip_run.replan=never": r"ClipRunConfig.replan: expected one of",

@@ -1,12 +1,14 @@
 """NeuralParkerPlanner: rebuilt from a checkpoint, plays the env's rules, returns a consistent Plan."""
 
+import dataclasses
 import json
 
 import numpy as np
 import pytest
 
 from np_policy.checkpoint import CheckpointError
-from np_policy.config import FOOTPRINT_ANYTIME, FOOTPRINT_BEST_OF_N, PAPER, PRESETS, NeuralParkerConfig
+from np_policy.config import (FOOTPRINT_ANYTIME, FOOTPRINT_BEST_OF_N, FOOTPRINT_SEARCH, PAPER, PRESETS,
+                              NeuralParkerConfig)
 from np_policy.planner import NeuralParkerPlanner, Policy
 from np_policy.train import TrainConfig, train
 from np_sim.errors import ConfigError
@@ -134,9 +136,12 @@ def test_a_success_that_breaks_its_rule_is_claimed_as_a_validation_failure(plann
 def test_presets_are_the_documented_recipes_and_round_trip_through_json():
     """'paper' is the mean rollout with the checkpoint's connector; 'footprint_best_of_n' is the recipe of
     docs/planners.md (32 samples, rescue rounds 128 at 2 σ, 128 at 3 σ, 128 with uniform first arcs at 1 σ, the
-    rescue for clearance below 0.2 m, the centred connector); every preset survives to_dict → JSON → from_dict."""
+    rescue for clearance below 0.2 m, the centred connector); 'footprint_search' is 'footprint_anytime' with the
+    0.2 m search and the start-limited clearance; every preset survives to_dict → JSON → from_dict."""
     assert PRESETS == {"paper": PAPER, "footprint_best_of_n": FOOTPRINT_BEST_OF_N,
-                       "footprint_anytime": FOOTPRINT_ANYTIME}
+                       "footprint_anytime": FOOTPRINT_ANYTIME, "footprint_search": FOOTPRINT_SEARCH}
+    assert FOOTPRINT_SEARCH == dataclasses.replace(FOOTPRINT_ANYTIME, search_margin_m=0.2,
+                                                   start_limited_clearance=True)
     assert (PAPER.action, PAPER.samples, PAPER.rescue, PAPER.connector, PAPER.margin_m) == ("mean", 0, (), None, 0.0)
     best = FOOTPRINT_BEST_OF_N
     assert (best.samples, best.connector, best.rescue_clearance_m) == (32, "centred", 0.2)
@@ -146,7 +151,8 @@ def test_presets_are_the_documented_recipes_and_round_trip_through_json():
         assert NeuralParkerConfig.from_dict(json.loads(json.dumps(preset.to_dict()))) == preset
     assert NeuralParkerConfig(rescue=((8, 2),)).rescue == ((8, 2.0, "policy"),)
     with pytest.raises(ConfigError,
-                       match=r"expected a preset name, one of \['footprint_anytime', 'footprint_best_of_n', 'paper'\]"):
+                       match=r"expected a preset name, one of \['footprint_anytime', 'footprint_best_of_n', "
+                             r"'footprint_search', 'paper'\]"):
         NeuralParkerConfig.preset("best")
     with pytest.raises(ConfigError, match=r"NeuralParkerConfig: unknown key\(s\) \['sample'\]"):
         NeuralParkerConfig.from_dict({"sample": 3})
