@@ -251,8 +251,11 @@ def footprint_notes(footprint: NeuralParkerConfig) -> list[str]:
                      f"when that succeeds, is steerable and keeps {footprint.accept_mean_m:g} m of clearance "
                      f"(planner.neuralparker_footprint.accept_mean_m){aligned}; otherwise:")
         if footprint.search_margin_m is not None:
+            steer = ("priced at its drive time" if footprint.search_steer_cost_m is None
+                     else f"at {footprint.search_steer_cost_m:g} m")
             notes.append(f"it searches with Hybrid A* for the body grown by {footprint.search_margin_m:g} m "
-                         f"(footprint convention, at most {footprint.search_max_expanded} expansions; "
+                         f"(footprint convention, at most {footprint.search_max_expanded} expansions, steering "
+                         f"{steer}; "
                          f"planner.neuralparker_footprint.search_margin_m) and returns that plan when it passes the "
                          f"same test; otherwise:")
         if footprint.start_limited_clearance:
@@ -417,7 +420,8 @@ def call_table(records: list[dict], names: list[str]) -> list[str]:
     """Markdown lines: per method, every planner call's plan time (median, 90th percentile) and, for a
     staged-effort planner, how many calls each stage answered and their median time."""
     lines = ["| Method | Planner calls | Plan time, all calls: median / p90 (ms) | Calls answered by the mean "
-             "rollout / the guarded rollout / the search / the sampled round / the rescue rounds (median ms) |", "|---|---|---|---|"]
+             "rollout / the guarded rollout / the search / the sampled round / the rescue rounds (median ms) |",
+             "|---|---|---|---|"]
     for name in names:
         rows = [r for r in records if r["planner"] == name]
         times = np.array([t for r in rows for t in r["plan_times_ms"]])

@@ -36,7 +36,8 @@ from np_policy.config import PAPER, NeuralParkerConfig, TrainConfig, check_bench
 from np_policy.guarded import GuardedRollout
 from np_policy.inference import CompiledActor
 from np_policy.network import ActorCritic
-from np_policy.sampling import PolicyRollouts, choose, clearance_covers_sweep, clearance_level, steerable
+from np_policy.sampling import (PolicyRollouts, choose, clearance_covers_sweep, clearance_level, curve_surcharge,
+                               steerable)
 from np_sim.collision import path_valid
 from np_sim.config import EnvConfig
 from np_sim.errors import ConfigError, StartInCollisionError
@@ -119,9 +120,12 @@ SEARCH_TIME_BUDGET_S = 3600.0
 
 def search_fallback(body: VehicleSpec, config: NeuralParkerConfig, margin_m: float) -> HybridAStar:
     """The anytime search of ``config.search_margin_m``: footprint convention, ``body`` grown by ``margin_m``, the
-    node budget ``config.search_max_expanded``."""
+    node budget ``config.search_max_expanded``, the steering cost ``config.search_steer_cost_m``."""
+    steer_cost = config.search_steer_cost_m
+    if steer_cost is None:
+        steer_cost = curve_surcharge(config.weights, body.kappa_max, HybridAStarConfig.step_m)
     search = HybridAStarConfig(vehicle=body.inflated(margin_m), max_expanded=config.search_max_expanded,
-                               time_budget_s=SEARCH_TIME_BUDGET_S)
+                               steer_cost_m=steer_cost, time_budget_s=SEARCH_TIME_BUDGET_S)
     return HybridAStar(search, convention="footprint")
 
 

@@ -200,6 +200,13 @@ def drive_length(rows: np.ndarray, weights: ChoiceWeights) -> float:
     return float(np.sum(ds / np.minimum(cruise, curve)) * weights.forward_speed_mps)
 
 
+def curve_surcharge(weights: ChoiceWeights, kappa: float, length_m: float) -> float:
+    """How much longer ``drive_length`` counts ``length_m`` driven forward at curvature ``kappa`` than driven straight
+    (m): length · (v_f / min(v_f, √(a_lat / |κ|)) − 1), v_f the forward cruise speed."""
+    curve = math.sqrt(weights.lateral_accel_mps2 / max(abs(kappa), 1e-12))
+    return length_m * (weights.forward_speed_mps / min(weights.forward_speed_mps, curve) - 1.0)
+
+
 def steerable(rows: np.ndarray, vehicle: VehicleSpec, weights: ChoiceWeights) -> bool:
     """Every sampled |steer curvature| of plan rows (``Plan.sample``) is within (1 + ``curvature_tolerance``)·κ_max:
     the tracker's own check of a plan it is given."""

@@ -1,6 +1,7 @@
 """experiments.closed_loop: two site clips end to end, headless, with Hybrid A* and an untrained site policy."""
 
 import csv
+import dataclasses
 import json
 import re
 
@@ -219,3 +220,17 @@ def test_stitch_flag_reaches_the_clip_runs_config_and_table(tmp_path):
     assert config["clip_run"]["stitch"] is True and config["clip_run"]["stitch_margin_m"] == 0.2
     assert "Stitched replanning (clip_run.stitch)" in result["table"]
     assert result["records"][0]["footprint_success"]
+
+
+def test_the_notes_name_the_search_stage_and_the_start_limited_clearance():
+    from experiments.closed_loop import footprint_notes
+    from np_policy.config import FOOTPRINT_SEARCH
+
+    notes = " ".join(footprint_notes(FOOTPRINT_SEARCH))
+    assert ("it searches with Hybrid A* for the body grown by 0.2 m (footprint convention, at most 2000 expansions, "
+            "steering priced at its drive time; planner.neuralparker_footprint.search_margin_m) and returns that plan "
+            "when it passes the same test; otherwise:") in notes
+    assert "(The clearance asked of a call's plans is at most its start pose's" in notes
+    assert "steering at 0.1 m;" in " ".join(footprint_notes(dataclasses.replace(FOOTPRINT_SEARCH,
+                                                                                 search_steer_cost_m=0.1)))
+    assert "Hybrid A*" not in " ".join(footprint_notes(FOOTPRINT_ANYTIME))

@@ -30,14 +30,15 @@ def _planner(policy, **fields) -> NeuralParkerPlanner:
 
 def test_where_the_mean_rollouts_are_refused_the_grown_body_search_answers_with_the_clearance(policy):
     """Training clip 37: neither mean rollout keeps 0.2 m; the planner's answer is the plan of a Hybrid A* search
-    built here for the body grown by 0.2 m, and shapely finds the real body 0.2 m off everything along it."""
+    built here for the body grown by 0.2 m (steering priced at 0.649 m, the test below), and shapely finds the real
+    body 0.2 m off everything along it."""
     planner = _planner(policy, search_margin_m=0.2)
     scene, start = first_frame(37)
     assert not planner.grown_answer(scene, start)[1]
     plan = planner.plan(scene, start)
     assert plan.stage == "search" and plan.success
     search = HybridAStar(HybridAStarConfig(vehicle=planner.body.inflated(0.2), max_expanded=2000,
-                                           time_budget_s=3600.0), convention="footprint")
+                                           steer_cost_m=0.6492424, time_budget_s=3600.0), convention="footprint")
     np.testing.assert_array_equal(plan.arcs, search.plan(scene, start).arcs)
     assert shapely_clearance(scene, plan.sample(0.05), planner.body) >= 0.2 - 1e-9
     assert validation_failure(scene, plan, "footprint", planner.body) == ""
@@ -101,3 +102,19 @@ def test_start_limited_clearance_asks_no_more_than_the_start_pose_keeps(policy):
     plan = planner.plan(scene, start)
     assert plan.success and shapely_clearance(scene, plan.sample(0.05), planner.body) >= expected - 1e-9
     assert validation_failure(scene, plan, "footprint", planner.body) == ""
+
+
+def test_the_search_prices_curvature_as_the_choice_prices_drive_time(policy):
+    """By hand: at κ = 0.68 m⁻¹ the lateral limit of 1 m/s² allows √(1/0.68) = 1.2127 m/s, so a 1 m primitive
+    takes 0.8246 s instead of 0.5 s at 2 m/s, 0.6492 m more at cruise speed; at 0.2 m⁻¹ (2.236 m/s) the cruise speed
+    binds and it costs nothing. The search's steering cost is that price unless set."""
+    from np_policy.sampling import ChoiceWeights, curve_surcharge
+
+    weights = ChoiceWeights()
+    assert curve_surcharge(weights, 0.68, 1.0) == pytest.approx(2.0 * 0.8246211 - 1.0, abs=1e-6)
+    assert curve_surcharge(weights, -0.68, 2.0) == pytest.approx(2.0 * (2.0 * 0.8246211 - 1.0), abs=1e-6)
+    assert curve_surcharge(weights, 0.2, 1.0) == 0.0 and curve_surcharge(weights, 0.0, 1.0) == 0.0
+    derived = _planner(policy, search_margin_m=0.2)
+    assert derived.search_at(0.2).config.steer_cost_m == pytest.approx(0.6492, abs=1e-4)
+    assert derived.body.kappa_max == 0.68
+    assert _planner(policy, search_margin_m=0.2, search_steer_cost_m=0.1).search_at(0.2).config.steer_cost_m == 0.1

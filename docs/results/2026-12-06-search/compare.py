@@ -44,14 +44,17 @@ def summary(label: str, runs: dict[str, dict], reference: dict[str, dict] | None
 
 def main() -> None:
     first, following = load(PRESET, "first94_without"), load(PRESET, "next94_without")
-    print(summary("preset, first 94", first, None))
-    print(summary("preset, next 94", following, None))
-    for name in ("first94_search", "first94_search_start_limited", "first94_search_start_limited_aligned"):
+    print(summary("footprint_anytime, first 94", first, None))
+    print(summary("footprint_anytime, next 94", following, None))
+    for name in ("first94_search_steer0.1", "first94_search_start_limited_steer0.1",
+                 "first94_search_start_limited_aligned_steer0.1", "first94_footprint_search"):
         print(summary(name, load(HERE, name), first))
-    print(summary("next94_search_start_limited", load(HERE, "next94_search_start_limited"), following))
+    for name in ("next94_search_start_limited_steer0.1", "next94_footprint_search"):
+        print(summary(name, load(HERE, name), following))
     held = load(HERE, "heldout_footprint_anytime_same_session")
     print(summary("held out, footprint_anytime (same session)", held, None))
-    print(summary("held out, footprint_search", load(HERE, "heldout_footprint_search"), held))
+    for name in ("heldout_footprint_search_steer0.1", "heldout_footprint_search"):
+        print(summary(f"held out, {name}", load(HERE, name), held))
 
 
 if __name__ == "__main__":
