@@ -4,7 +4,9 @@
 environment it was trained in (the checkpoint's ``EnvConfig``), so arcs, collision checks, the heading gate and
 the Hermite selection follow exactly the env's rules. ``config`` is a `np_policy.config.NeuralParkerConfig`, by
 name from ``PRESETS``: 'paper' (the default) plays the mean action once, the paper's planner; 'footprint_best_of_n'
-adds seeded sampled rollouts and rescue rounds and returns the best by `np_policy.sampling.choose`. Every rollout,
+adds seeded sampled rollouts and rescue rounds and returns the best by `np_policy.sampling.choose`; the anytime presets
+answer first with the mean rollout when it keeps 0.2 m of clearance, and 'footprint_search' (beyond the paper, a
+learned-first hybrid) then with a Hybrid A* plan for the body grown by 0.2 m before any sampling. Every rollout,
 mean or sampled, is one batch of `np_policy.sampling.PolicyRollouts` (the mean rollout: a batch of one with zero
 noise), its actions from ``CompiledActor`` (the same weights in one numba function, about 20× faster than torch
 at batch 1). Every successful rollout is validated before it is claimed or chosen
