@@ -2,7 +2,8 @@
 Table ``tab:realworld``, App. C, Fig. ``fig:searchtime``; spec §8).
 
 ``python -m experiments.closed_loop --clips [--split eval|train-difficult] [--clips-limit N | --clip-names NAME ...]
-[--planners neuralparker neuralparker_footprint np_guided_astar hybrid_astar] [--checkpoint PATH] [--no-render]
+[--planners neuralparker neuralparker_footprint neuralparker_search np_guided_astar hybrid_astar] [--checkpoint PATH]
+[--no-render]
 [--vehicle sedan|van|FILE] [--workers N] [--out DIR] [--set KEY=VALUE ...]``
 
 For every evaluation clip and planner, `tracking.clip_run.run_clip` starts the MuJoCo vehicle at the clip's start
@@ -15,7 +16,9 @@ object nor outside the boundary). Planners (`experiments.registry`): NeuralParke
 paper-faithful reference-point training, the 'paper' preset), "NeuralParker (footprint)"
 (``checkpoints/site_np_footprint.pt``, trained under the footprint convention, the 'footprint_anytime' preset: its
 mean rollout when that keeps 0.2 m of clearance, else the best of it and 32 seeded sampled rollouts, then wider
-rescue rounds, centred connector order; by default its row is left out with a note when the file is missing),
+rescue rounds, centred connector order), "NeuralParker (footprint) + search" (the same checkpoint, the
+'footprint_search' preset: a learned-first hybrid with a Hybrid A* search for the body grown by 0.2 m between the
+mean rollouts and the sampled round; both footprint rows are left out with a note when the file is missing),
 NP-Guided A* and Hybrid A* (both searching under the footprint convention). ``--vehicle`` (`np_sim.vehicle`) is
 the vehicle planned for and driven (``planner.vehicle`` and ``clip_run.tracker.vehicle``, which must agree): the
 searches' footprint and κ_max, the validators, the MuJoCo vehicle; the shipped site checkpoints were trained for the
@@ -67,8 +70,11 @@ from np_sim.provenance import git_state
 from tracking.clip_run import ClipRunConfig
 from tracking.rerun_log import merge_recordings
 
-PLANNERS = ("neuralparker", "neuralparker_footprint", "np_guided_astar", "hybrid_astar")
-"""Planners of the table, in the paper's row order (the footprint-aware NeuralParker after the paper-faithful one)."""
+PLANNERS = ("neuralparker", "neuralparker_footprint", "neuralparker_search", "np_guided_astar", "hybrid_astar")
+"""Planners of the table, in the paper's row order (the footprint-aware NeuralParker and its learned-first hybrid with
+a search after the paper-faithful one)."""
+FOOTPRINT_ROWS = ("neuralparker_footprint", "neuralparker_search")
+"""The rows that play the footprint-aware checkpoint (``PlannerOptions.footprint_checkpoint``)."""
 PAPER = {"neuralparker": "0.60 (0.93) | 7.0 | 1.20 | 0.37", "np_guided_astar": "0.72 | 7.7 | 1.17 | 4.24",
          "hybrid_astar": "0.67 | 7.2 | 1.13 | 5.26"}
 """Table tab:realworld (real vehicle, C++ plan times): succ. | L | Rev. | plan time (ms)."""
@@ -78,8 +84,8 @@ footprint-aware planner's settings were tuned; the first 94 are left out of its 
 SITE_PLANNERS = PlannerOptions(checkpoint=Path("checkpoints/site_np.pt"),
                                footprint_checkpoint=Path("checkpoints/site_np_footprint.pt"), convention="footprint",
                                benchmark="site")
-"""The shipped site checkpoints (paper-faithful, footprint-aware), the presets 'paper' and 'footprint_anytime',
-both searches under the footprint convention (the paper validates with the footprint)."""
+"""The shipped site checkpoints (paper-faithful, footprint-aware), the presets 'paper', 'footprint_anytime' and
+'footprint_search', both searches under the footprint convention (the paper validates with the footprint)."""
 
 
 @dataclass(frozen=True)
@@ -87,8 +93,8 @@ class ClosedLoopConfig:
     """Everything a closed-loop run depends on (written to its ``config.json``)."""
 
     planners: tuple[str, ...] | None = None
-    """Planners to run, in table order; None = all of ``PLANNERS``, leaving out 'neuralparker_footprint' (with a
-    note) when its checkpoint is missing (a planner named explicitly must have its checkpoint)."""
+    """Planners to run, in table order; None = all of ``PLANNERS``, leaving out the two footprint rows (with a note)
+    when their checkpoint is missing (a planner named explicitly must have its checkpoint)."""
     split: str = "eval"
     """Clip set, ``CLIP_SPLITS``: the held-out clips or the difficult training clips."""
     clips_limit: int | None = None
@@ -140,8 +146,8 @@ def planner_names(config: ClosedLoopConfig) -> tuple[list[str], list[str]]:
         return list(config.planners), []
     footprint = config.planner.footprint_checkpoint
     if footprint is None or not Path(footprint).exists():
-        return [n for n in PLANNERS if n != "neuralparker_footprint"], [
-            f"NeuralParker (footprint): {footprint} is missing, row left out."]
+        return [n for n in PLANNERS if n not in FOOTPRINT_ROWS], [
+            f"{label(n)}: {footprint} is missing, row left out." for n in FOOTPRINT_ROWS]
     return list(PLANNERS), []
 
 
@@ -226,62 +232,80 @@ def _work(args) -> list[dict]:
 
 
 def planner_notes(names: list[str], config: ClosedLoopConfig) -> list[str]:
-    """The table's notes on the run's settings beyond the paper's (stitching, the footprint row's preset)."""
+    """The table's notes on the run's settings beyond the paper's (stitching, the footprint rows' presets)."""
     notes = []
     if config.clip_run.stitch:
         notes.append("Stitched replanning (clip_run.stitch): a moving vehicle's replan starts from the pose ahead on "
                      "its followed plan where it can still stop, and it drives that plan up to there.")
     if "neuralparker_footprint" in names:
         notes += footprint_notes(config.planner.neuralparker_footprint)
+    if "neuralparker_search" in names:
+        search, footprint = config.planner.neuralparker_search, config.planner.neuralparker_footprint
+        if "neuralparker_footprint" in names and dataclasses.replace(search, **{
+                f: getattr(footprint, f) for f in SEARCH_FIELDS}) == footprint:
+            notes += [f"{label('neuralparker_search')} plays the same policy and stages as NeuralParker "
+                      f"(footprint), and where its mean rollouts are refused", *search_notes(search)]
+        else:
+            notes += footprint_notes(search, "neuralparker_search")
     return notes
 
 
-def footprint_notes(footprint: NeuralParkerConfig) -> list[str]:
-    """The table's notes on how the footprint row plays its policy (its `NeuralParkerConfig`)."""
+SEARCH_FIELDS = ("search_margin_m", "search_max_expanded", "search_steer_cost_m", "start_limited_clearance")
+"""The `NeuralParkerConfig` fields of the search stage (the difference between the two footprint rows' presets)."""
+
+
+def search_notes(config: NeuralParkerConfig, row: str = "neuralparker_search") -> list[str]:
+    """The notes on the search stage of the footprint row ``row`` playing ``config`` (none without one)."""
     notes = []
+    if config.search_margin_m is not None:
+        steer = ("priced at its drive time" if config.search_steer_cost_m is None
+                 else f"at {config.search_steer_cost_m:g} m")
+        notes.append(f"it searches with Hybrid A* for the body grown by {config.search_margin_m:g} m (footprint "
+                     f"convention, at most {config.search_max_expanded} expansions, steering {steer}; "
+                     f"planner.{row}.search_margin_m) and returns that plan when it passes the same test; otherwise "
+                     f"its sampled and rescue rounds run.")
+    if config.start_limited_clearance:
+        notes.append(f"(The clearance asked of a call's plans is at most its start pose's: "
+                     f"planner.{row}.start_limited_clearance.)")
+    return notes
+
+
+def footprint_notes(footprint: NeuralParkerConfig, row: str = "neuralparker_footprint") -> list[str]:
+    """The table's notes on how the footprint row ``row`` plays its policy (its `NeuralParkerConfig`)."""
+    notes, name, key = [], label(row), f"planner.{row}"
     if footprint.accept_mean_m is not None:
         grown = (f", played first with the body grown by {footprint.mean_margin_m:g} m, then as is "
-                 f"(planner.neuralparker_footprint.mean_margin_m)" if footprint.mean_margin_m else "")
+                 f"({key}.mean_margin_m)" if footprint.mean_margin_m else "")
         guarded = (f" (before the plain one, the guarded mean rollout: each arc the first of the mean action and "
                    f"offsets at {', '.join(f'{s:g}' for s in footprint.guard_sigmas)} σ that parks aligned, else does "
-                   f"not collide; planner.neuralparker_footprint.guard_sigmas)" if footprint.guard_sigmas else "")
+                   f"not collide; {key}.guard_sigmas)" if footprint.guard_sigmas else "")
         aligned = (f" and ends within {footprint.weights.heading_slack_deg:g}° of the target's heading "
-                   f"(planner.neuralparker_footprint.accept_aligned)" if footprint.accept_aligned else "")
-        notes.append(f"NeuralParker (footprint) returns its mean rollout{grown}{guarded}{',' if grown else ''} at once "
+                   f"({key}.accept_aligned)" if footprint.accept_aligned else "")
+        notes.append(f"{name} returns its mean rollout{grown}{guarded}{',' if grown else ''} at once "
                      f"when that succeeds, is steerable and keeps {footprint.accept_mean_m:g} m of clearance "
-                     f"(planner.neuralparker_footprint.accept_mean_m){aligned}; otherwise:")
-        if footprint.search_margin_m is not None:
-            steer = ("priced at its drive time" if footprint.search_steer_cost_m is None
-                     else f"at {footprint.search_steer_cost_m:g} m")
-            notes.append(f"it searches with Hybrid A* for the body grown by {footprint.search_margin_m:g} m "
-                         f"(footprint convention, at most {footprint.search_max_expanded} expansions, steering "
-                         f"{steer}; "
-                         f"planner.neuralparker_footprint.search_margin_m) and returns that plan when it passes the "
-                         f"same test; otherwise:")
-        if footprint.start_limited_clearance:
-            notes.append("(The clearance asked of a call's plans is at most its start pose's: "
-                         "planner.neuralparker_footprint.start_limited_clearance.)")
+                     f"({key}.accept_mean_m){aligned}; otherwise:")
+        notes += search_notes(footprint, row)
     if footprint.samples:
-        notes.append(f"NeuralParker (footprint) plays the best of its mean rollout and {footprint.samples} sampled "
-                     f"rollouts (np_policy.sampling; planner.neuralparker_footprint.samples=0 = the paper's planner).")
+        notes.append(f"{name} plays the best of its mean rollout and {footprint.samples} sampled "
+                     f"rollouts (np_policy.sampling; {key}.samples=0 = the paper's planner).")
     if footprint.rescue:
         rounds = ", then ".join(f"{n} at {scale:g} σ" + (" after a uniform first arc" if first == "uniform" else "")
                                 for n, scale, first in footprint.rescue)
         when = (f"none of them succeeds or the best keeps less than {footprint.rescue_clearance_m:g} m clearance"
                 if footprint.rescue_clearance_m > 0 else "none of them succeeds")
-        notes.append(f"When {when} it samples {rounds} (planner.neuralparker_footprint.rescue).")
+        notes.append(f"When {when} it samples {rounds} ({key}.rescue).")
         if footprint.rescue_stop_m is not None and len(footprint.rescue) > 1:
             keeps = f" and keeps {footprint.rescue_stop_m:g} m clearance" if footprint.rescue_stop_m > 0 else ""
             notes.append(f"After a rescue round the later ones are skipped once the chosen plan succeeds{keeps} "
-                         f"(planner.neuralparker_footprint.rescue_stop_m).")
+                         f"({key}.rescue_stop_m).")
     if footprint.rollout_max_arcs is not None and (footprint.samples or footprint.rescue):
         grown = ", grown-body mean" if footprint.mean_margin_m else ""
         guarded = ", guarded" if footprint.guard_sigmas else ""
-        notes.append(f"NeuralParker (footprint)'s sampled{grown}{guarded} and rescue rollouts end as timeouts after "
+        notes.append(f"{name}'s sampled{grown}{guarded} and rescue rollouts end as timeouts after "
                      f"{footprint.rollout_max_arcs} arcs, its plain mean rollout at the policy env's budget "
-                     f"(planner.neuralparker_footprint.rollout_max_arcs).")
+                     f"({key}.rollout_max_arcs).")
     if footprint.connector:
-        notes.append(f"NeuralParker (footprint)'s terminal connector: {footprint.connector} "
+        notes.append(f"{name}'s terminal connector: {footprint.connector} "
                      f"(centred = the fixed nine candidates, target-aligned first).")
     return notes
 
@@ -486,8 +510,8 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--clips-limit", type=positive_int, default=None, help="only the first N clips")
     parser.add_argument("--clip-names", nargs="+", default=(), help="only these clips (e.g. eval-1000016)")
     parser.add_argument("--planners", nargs="+", choices=PLANNERS, default=None,
-                        help="planners to run (default all; neuralparker_footprint is left out with a note when "
-                             "its checkpoint is missing)")
+                        help="planners to run (default all; neuralparker_footprint and neuralparker_search are left "
+                             "out with a note when their checkpoint is missing)")
     parser.add_argument("--checkpoint", type=Path, default=SITE_PLANNERS.checkpoint,
                         help=f"paper-faithful site NeuralParker checkpoint of neuralparker and np_guided_astar "
                              f"(default {SITE_PLANNERS.checkpoint})")

@@ -119,7 +119,7 @@ def main(argv=None) -> dict[str, Any]:
     parser.add_argument("--split", choices=CLIP_SPLITS, default="eval", help="clip set (default the held-out 47)")
     parser.add_argument("--clips-limit", type=positive_int, default=None, help="only the first N clips")
     parser.add_argument("--planners", nargs="+", choices=PLANNERS, default=list(PLANNERS),
-                        help="planners to time (default the main job's four)")
+                        help="planners to time (default the main job's five)")
     parser.add_argument("--out", type=fresh_folder, default=None,
                         help="new or empty run folder (default: a fresh results/plan_time/<time>)")
     parser.add_argument("--set", nargs="+", action="extend", default=[], metavar="KEY=VALUE", dest="overrides",

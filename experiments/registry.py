@@ -22,7 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from np_policy.config import FOOTPRINT_ANYTIME, PAPER, NeuralParkerConfig
+from np_policy.config import FOOTPRINT_ANYTIME, FOOTPRINT_SEARCH, PAPER, NeuralParkerConfig
 from np_sim.config import Convention
 from np_sim.errors import ConfigError
 from np_sim.planners.protocol import CONVENTIONS, Planner
@@ -42,10 +42,13 @@ class PlannerOptions:
     neuralparker: NeuralParkerConfig = PAPER
     """How those planners play the policy (default the 'paper' preset)."""
     footprint_checkpoint: Path | None = None
-    """Checkpoint of 'neuralparker_footprint' (the footprint-aware site policy)."""
+    """Checkpoint of 'neuralparker_footprint' and 'neuralparker_search' (the footprint-aware site policy)."""
     neuralparker_footprint: NeuralParkerConfig = FOOTPRINT_ANYTIME
     """How 'neuralparker_footprint' plays its policy (default the 'footprint_anytime' preset: best of N, the mean
     rollout returned at once when it keeps 0.2 m)."""
+    neuralparker_search: NeuralParkerConfig = FOOTPRINT_SEARCH
+    """How 'neuralparker_search' plays the same policy (default the 'footprint_search' preset: the anytime preset
+    with a Hybrid A* search for the grown body between its mean rollouts and its sampled round)."""
     convention: Convention = "reference_point"
     """Collision convention of the searches (Hybrid A*, NP-Guided A*, the staged prefix, OMPL RRT*)."""
     search_margin_m: float = 0.0
@@ -153,12 +156,19 @@ def _neuralparker(options: PlannerOptions, load: PolicyLoader) -> Planner:
     return _learned(options, load, "neuralparker")
 
 
-def _neuralparker_footprint(options: PlannerOptions, load: PolicyLoader) -> Planner:
+def _footprint_policy(options: PlannerOptions, load: PolicyLoader, name: str, config: NeuralParkerConfig) -> Planner:
     from np_policy.planner import NeuralParkerPlanner
 
-    path = required_checkpoint(options.footprint_checkpoint, "neuralparker_footprint",
-                               "--set planner.footprint_checkpoint=PATH")
-    return NeuralParkerPlanner(load(path), options.neuralparker_footprint)
+    path = required_checkpoint(options.footprint_checkpoint, name, "--set planner.footprint_checkpoint=PATH")
+    return NeuralParkerPlanner(load(path), config)
+
+
+def _neuralparker_footprint(options: PlannerOptions, load: PolicyLoader) -> Planner:
+    return _footprint_policy(options, load, "neuralparker_footprint", options.neuralparker_footprint)
+
+
+def _neuralparker_search(options: PlannerOptions, load: PolicyLoader) -> Planner:
+    return _footprint_policy(options, load, "neuralparker_search", options.neuralparker_search)
 
 
 def _hope(options: PlannerOptions, load: PolicyLoader) -> Planner:
@@ -177,6 +187,7 @@ REGISTRY: dict[str, Entry] = {
     "ompl_rrtstar": Entry("OMPL RRT*", _ompl_rrtstar),
     "neuralparker": Entry("NeuralParker", _neuralparker),
     "neuralparker_footprint": Entry("NeuralParker (footprint)", _neuralparker_footprint),
+    "neuralparker_search": Entry("NeuralParker (footprint) + search", _neuralparker_search),
     "staged_astar_np": Entry("Hybrid A* → NP", _staged_astar_np),
     "hope": Entry("Adapted HOPE", _hope),
     "staged_astar_hope": Entry("Hybrid A* → HOPE", _staged_astar_hope),

@@ -13,7 +13,7 @@ from experiments.closed_loop import SITE_PLANNERS, ClosedLoopConfig, main
 from experiments.overrides import apply_overrides
 from experiments.registry import build_planners
 from np_policy.checkpoint import save_checkpoint
-from np_policy.config import FOOTPRINT_ANYTIME, PAPER
+from np_policy.config import FOOTPRINT_ANYTIME, FOOTPRINT_SEARCH, PAPER
 from np_policy.network import ActorCritic
 from np_policy.train import TrainConfig, benchmark_defaults
 
@@ -149,6 +149,7 @@ def test_the_default_site_planners_are_the_presets():
     own standard deviation), the paper-faithful row and NP-Guided A*'s guide the 'paper' preset with the site
     checkpoint's connector (the paper's order); both searches plan under the footprint convention."""
     assert SITE_PLANNERS.neuralparker == PAPER and SITE_PLANNERS.neuralparker_footprint == FOOTPRINT_ANYTIME
+    assert SITE_PLANNERS.neuralparker_search == FOOTPRINT_SEARCH
     planners = build_planners(["neuralparker", "neuralparker_footprint", "np_guided_astar", "hybrid_astar"],
                               SITE_PLANNERS)
     default = planners["neuralparker_footprint"]
@@ -223,14 +224,19 @@ def test_stitch_flag_reaches_the_clip_runs_config_and_table(tmp_path):
 
 
 def test_the_notes_name_the_search_stage_and_the_start_limited_clearance():
-    from experiments.closed_loop import footprint_notes
-    from np_policy.config import FOOTPRINT_SEARCH
+    from experiments.closed_loop import footprint_notes, planner_notes
 
     notes = " ".join(footprint_notes(FOOTPRINT_SEARCH))
     assert ("it searches with Hybrid A* for the body grown by 0.2 m (footprint convention, at most 2000 expansions, "
             "steering priced at its drive time; planner.neuralparker_footprint.search_margin_m) and returns that plan "
-            "when it passes the same test; otherwise:") in notes
+            "when it passes the same test; otherwise its sampled and rescue rounds run.") in notes
     assert "(The clearance asked of a call's plans is at most its start pose's" in notes
     assert "steering at 0.1 m;" in " ".join(footprint_notes(dataclasses.replace(FOOTPRINT_SEARCH,
                                                                                  search_steer_cost_m=0.1)))
     assert "Hybrid A*" not in " ".join(footprint_notes(FOOTPRINT_ANYTIME))
+    both = planner_notes(["neuralparker_footprint", "neuralparker_search"], ClosedLoopConfig())
+    assert ("NeuralParker (footprint) + search plays the same policy and stages as NeuralParker (footprint), and "
+            "where its mean rollouts are refused") in both
+    assert sum("planner.neuralparker_search.search_margin_m" in n for n in both) == 1
+    alone = " ".join(planner_notes(["neuralparker_search"], ClosedLoopConfig()))
+    assert "NeuralParker (footprint) + search returns its mean rollout" in alone and "neuralparker_footprint" not in alone

@@ -25,7 +25,7 @@ def test_every_entry_builds_a_planner_of_its_name_and_the_options_convention():
     assert list(built) == names
     for name, planner in built.items():
         assert isinstance(planner, Planner), name
-        assert planner.name == ("neuralparker" if name == "neuralparker_footprint" else name)
+        assert planner.name == ("neuralparker" if name in ("neuralparker_footprint", "neuralparker_search") else name)
     searches = ("hybrid_astar", "np_guided_astar", "ompl_rrtstar", "staged_astar_np")
     assert {built[n].convention for n in searches} == {"footprint"}
     assert built["neuralparker"].convention == "reference_point"  # the Factorial checkpoint's own
@@ -33,6 +33,9 @@ def test_every_entry_builds_a_planner_of_its_name_and_the_options_convention():
     shared = [built[n].learned.policy for n in ("np_guided_astar", "staged_astar_np")]
     assert all(p is built["neuralparker"].policy for p in shared)
     assert built["neuralparker_footprint"].policy is not built["neuralparker"].policy
+    assert built["neuralparker_search"].policy is built["neuralparker_footprint"].policy  # one load, two presets
+    assert built["neuralparker_search"].config.search_margin_m == 0.2
+    assert built["neuralparker_footprint"].config.search_margin_m is None
     assert len({entry.label for entry in REGISTRY.values()}) == len(REGISTRY)
 
 
