@@ -28,9 +28,15 @@ from np_sim.kernels.geometry import (
 @njit(cache=True, error_model="numpy")
 def point_valid(geo, k: int, px: float, py: float) -> bool:
     """Reference-point convention for one point of scene k."""
-    boundary, n_boundary, poly, poly_nv, n_poly, aabb, circle, n_circle = geo[0], geo[1], geo[2], geo[3], geo[4], geo[5], geo[6], geo[7]
-    if point_in_polygon(px, py, boundary[k], n_boundary[k]) != INSIDE:
+    if point_in_polygon(px, py, geo[0][k], geo[1][k]) != INSIDE:
         return False
+    return point_clear_of_obstacles(geo, k, px, py)
+
+
+@njit(cache=True, error_model="numpy")
+def point_clear_of_obstacles(geo, k: int, px: float, py: float) -> bool:
+    """The obstacle half of ``point_valid``: the point is strictly outside every obstacle of scene k."""
+    poly, poly_nv, n_poly, aabb, circle, n_circle = geo[2], geo[3], geo[4], geo[5], geo[6], geo[7]
     for j in range(n_poly[k]):
         if px < aabb[k, j, 0] or px > aabb[k, j, 2] or py < aabb[k, j, 1] or py > aabb[k, j, 3]:
             continue

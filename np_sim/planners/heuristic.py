@@ -15,7 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from np_sim.kernels.collision import point_valid
+from np_sim.kernels.collision import point_clear_of_obstacles, point_valid
+from np_sim.kernels.geometry import INSIDE, point_in_polygon
 from np_sim.planners.heap import heap_pop, heap_push
 
 
@@ -39,6 +40,49 @@ def free_cells(geo, origin_x: float, origin_y: float, cell_m: float, nx: int, ny
         for c in range(nx):
             free[r, c] = point_valid(geo, 0, origin_x + c * cell_m, origin_y + r * cell_m)
     return free
+
+
+@njit(cache=True, error_model="numpy")
+def inside_cells(boundary: np.ndarray, n: int, origin_x: float, origin_y: float, cell_m: float, nx: int,
+                 ny: int) -> np.ndarray:
+    """(ny, nx) bool: the cell's centre is strictly inside the boundary polygon ``boundary[:n]`` (``point_valid``'s
+    boundary half)."""
+    inside = np.zeros((ny, nx), np.bool_)
+    for r in range(ny):
+        for c in range(nx):
+            inside[r, c] = point_in_polygon(origin_x + c * cell_m, origin_y + r * cell_m, boundary, n) == INSIDE
+    return inside
+
+
+@njit(cache=True, error_model="numpy")
+def free_cells_inside(geo, inside: np.ndarray, origin_x: float, origin_y: float, cell_m: float) -> np.ndarray:
+    """``free_cells`` given the boundary half ``inside`` (``inside_cells``): only the obstacles are tested."""
+    ny, nx = inside.shape
+    free = np.zeros((ny, nx), np.bool_)
+    for r in range(ny):
+        for c in range(nx):
+            free[r, c] = inside[r, c] and point_clear_of_obstacles(geo, 0, origin_x + c * cell_m, origin_y + r * cell_m)
+    return free
+
+
+BOUNDARY_CELLS_KEPT = 8
+"""Boundary masks ``boundary_cells`` keeps (a site's clips share one boundary, replanned in every frame)."""
+_boundary_cells: dict[tuple, np.ndarray] = {}
+
+
+def boundary_cells(boundary: np.ndarray, origin_x: float, origin_y: float, cell_m: float, nx: int,
+                   ny: int) -> np.ndarray:
+    """``inside_cells`` of ``boundary`` (its n × 2 vertices) on this grid, computed once per boundary and grid: the
+    boundary test is most of ``free_cells``'s work on a site lot, whose boundary stays while its objects move."""
+    verts = np.ascontiguousarray(boundary, dtype=float)
+    key = (verts.tobytes(), len(verts), origin_x, origin_y, cell_m, nx, ny)
+    mask = _boundary_cells.get(key)
+    if mask is None:
+        mask = inside_cells(verts, len(verts), origin_x, origin_y, cell_m, nx, ny)
+        if len(_boundary_cells) >= BOUNDARY_CELLS_KEPT:
+            _boundary_cells.pop(next(iter(_boundary_cells)))
+        _boundary_cells[key] = mask
+    return mask
 
 
 @njit(cache=True, error_model="numpy")
@@ -92,7 +136,8 @@ def holonomic_grid(geo, boundary: np.ndarray, goal_xy, cell_m: float) -> Holonom
     lo, hi = boundary.min(axis=0), boundary.max(axis=0)
     nx = int(math.floor((hi[0] - lo[0]) / cell_m)) + 1
     ny = int(math.floor((hi[1] - lo[1]) / cell_m)) + 1
-    free = free_cells(geo, float(lo[0]), float(lo[1]), float(cell_m), nx, ny)
+    inside = boundary_cells(geo[0][0][:geo[1][0]], float(lo[0]), float(lo[1]), float(cell_m), nx, ny)
+    free = free_cells_inside(geo, inside, float(lo[0]), float(lo[1]), float(cell_m))
     col = min(max(int(math.floor((goal_xy[0] - lo[0]) / cell_m + 0.5)), 0), nx - 1)
     row = min(max(int(math.floor((goal_xy[1] - lo[1]) / cell_m + 0.5)), 0), ny - 1)
     return HolonomicGrid(lo.astype(float), float(cell_m), grid_dijkstra(free, row, col, float(cell_m)))

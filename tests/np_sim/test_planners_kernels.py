@@ -1,6 +1,7 @@
 """Compiled pieces of the planners against slow exact versions on seeded random inputs: the heap (vs heapq), the
-guide distance (vs shapely), the holonomic grid Dijkstra (vs a plain-Python Dijkstra with the same step rules)
-and the lattice binning (vs its formula)."""
+guide distance (vs shapely), the holonomic grid Dijkstra (vs a plain-Python Dijkstra with the same step rules),
+the free cells from a kept boundary mask (vs every cell's ``point_valid``) and the lattice binning (vs its
+formula)."""
 
 from __future__ import annotations
 
@@ -11,9 +12,12 @@ import numpy as np
 import pytest
 from shapely.geometry import LineString, Point
 
+from clip_frames import first_frame  # tests/clip_frames.py
+from np_sim.benchmarks import load_benchmark
 from np_sim.planners.heap import heap_pop, heap_push
-from np_sim.planners.heuristic import grid_dijkstra
+from np_sim.planners.heuristic import boundary_cells, free_cells, free_cells_inside, grid_dijkstra
 from np_sim.planners.search_kernels import lattice_cell, polyline_distance
+from np_sim.scene_arrays import packed_scene
 
 
 def test_heap_pops_in_heapq_order():
@@ -96,3 +100,25 @@ def test_lattice_cell_bins_position_and_heading():
         it = math.floor((math.remainder(th, 2 * math.pi) + math.pi) / (2 * math.pi) * nth) % nth
         want = (iy * nx + ix) * nth + it if (0 <= ix < nx and 0 <= iy < ny) else -1
         assert lattice_cell(x, y, th, 0.0, 0.0, res, nx, ny, nth) == want
+
+
+def test_free_cells_from_a_kept_boundary_mask_are_every_cells_point_test():
+    """On benchmark scenes and a site frame (sharing its boundary with the other frames of the site): the boundary
+    mask kept per boundary and grid, with the obstacles tested per call, gives exactly ``free_cells`` (every cell's
+    ``point_valid``); the same boundary and grid reuse one mask."""
+    scenes = [*load_benchmark("factorial", "test")[:3], *load_benchmark("topology", "test")[:3], first_frame(10)[0],
+              first_frame(24)[0]]
+    for scene in scenes:
+        geo = packed_scene(scene).geometry
+        b = np.asarray(scene.boundary, float)
+        lo, hi, cell = b.min(axis=0), b.max(axis=0), 0.25
+        nx, ny = int((hi[0] - lo[0]) / cell) + 1, int((hi[1] - lo[1]) / cell) + 1
+        inside = boundary_cells(b, float(lo[0]), float(lo[1]), cell, nx, ny)
+        np.testing.assert_array_equal(free_cells_inside(geo, inside, float(lo[0]), float(lo[1]), cell),
+                                      free_cells(geo, float(lo[0]), float(lo[1]), cell, nx, ny))
+    site = [np.asarray(first_frame(k)[0].boundary, float) for k in (10, 24)]
+    np.testing.assert_array_equal(site[0], site[1])
+    lo = site[0].min(axis=0)
+    args = (float(lo[0]), float(lo[1]), 0.25, 20, 10)
+    assert boundary_cells(site[0], *args) is boundary_cells(site[1].copy(), *args)
+    assert boundary_cells(site[0], *args) is not boundary_cells(site[0], float(lo[0]), float(lo[1]), 0.5, 20, 10)
