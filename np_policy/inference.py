@@ -196,6 +196,8 @@ class CompiledActor:
                                len(enc.fusion), n_actor], np.int64)
         self.obs_size = enc.obs_size
         self.model = model
+        self.torch_only = enc.bev is not None
+        """The compiled kernel has no BEV stream: a BEV-input network (Table III's control) acts through torch."""
         with torch.no_grad():
             self.mats, self.vecs = _export(model)
 
@@ -205,6 +207,8 @@ class CompiledActor:
         if obs.shape != (self.obs_size,):
             raise ValueError(f"CompiledActor: expected one observation of shape ({self.obs_size},), "
                              f"got {obs.shape}")
+        if self.torch_only:
+            return self.model.mean_action(torch.from_numpy(obs[None])).numpy()[0]
         return _mean_action(obs, self.mats, self.vecs, self.sections, self.shape, self.eps)
 
     def batch(self, obs: np.ndarray) -> np.ndarray:
@@ -214,6 +218,6 @@ class CompiledActor:
         if obs.ndim != 2 or obs.shape[1] != self.obs_size:
             raise ValueError(f"CompiledActor.batch: expected observations of shape (B, {self.obs_size}), "
                              f"got {obs.shape}")
-        if len(obs) >= TORCH_BATCH:
+        if len(obs) >= TORCH_BATCH or self.torch_only:
             return self.model.mean_action(torch.from_numpy(obs)).numpy()
         return _mean_actions(obs, self.mats, self.vecs, self.sections, self.shape, self.eps)

@@ -176,6 +176,23 @@ def test_network_bev_branch_replaces_the_geometry_tokens(pretrained):
     assert before is None and model.encoder.bev[0].weight.grad.abs().sum() > 0  # the latent reaches the heads
 
 
+def test_the_planners_actor_of_a_bev_network_is_its_torch_mean_action(pretrained):
+    """The compiled kernel has no BEV stream: ``CompiledActor`` of a BEV network (the planner's actor) answers
+    with the torch model's mean action, one row and batched (it raised a shape error before)."""
+    from np_policy.inference import CompiledActor
+
+    torch.manual_seed(0)
+    model = ActorCritic(bev_observation(pretrained[0])).eval()
+    with torch.no_grad():
+        model.actor[-1].weight.mul_(300.0)
+    obs = torch.randn(5, 4 + 120 + 128)
+    expected = model.mean_action(obs).numpy()
+    actor = CompiledActor(model)
+    np.testing.assert_array_equal(actor.batch(obs.numpy()), expected)
+    np.testing.assert_allclose(np.stack([actor(o) for o in obs.numpy()]), expected, atol=2e-5, rtol=1e-4)
+    assert (np.abs(expected) < 1.0).any()
+
+
 def test_bev_config_errors():
     with pytest.raises(ConfigError, match="bev_encoder_file: use_bev needs"):
         ObservationConfig(use_obstacles=False, use_boundary=False, use_bev=True)
