@@ -199,7 +199,7 @@ class CompiledActor:
         self.torch_only = enc.bev is not None
         """The compiled kernel has no BEV stream: a BEV-input network (Table III's control) acts through torch."""
         with torch.no_grad():
-            self.mats, self.vecs = _export(model)
+            self.mats, self.vecs = ([], []) if self.torch_only else _export(model)
 
     def __call__(self, obs: np.ndarray) -> np.ndarray:
         """(2,) float32 action in [−1, 1] for one flat observation of length ``obs_size``."""

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from np_sim.kernels.collision import point_clear_of_obstacles, point_valid
+from np_sim.kernels.collision import point_clear_of_obstacles
 from np_sim.kernels.geometry import INSIDE, point_in_polygon
 from np_sim.planners.heap import heap_pop, heap_push
 
@@ -33,16 +33,6 @@ class HolonomicGrid:
 
 
 @njit(cache=True, error_model="numpy")
-def free_cells(geo, origin_x: float, origin_y: float, cell_m: float, nx: int, ny: int) -> np.ndarray:
-    """(ny, nx) bool: the reference point is valid at the cell's centre."""
-    free = np.zeros((ny, nx), np.bool_)
-    for r in range(ny):
-        for c in range(nx):
-            free[r, c] = point_valid(geo, 0, origin_x + c * cell_m, origin_y + r * cell_m)
-    return free
-
-
-@njit(cache=True, error_model="numpy")
 def inside_cells(boundary: np.ndarray, n: int, origin_x: float, origin_y: float, cell_m: float, nx: int,
                  ny: int) -> np.ndarray:
     """(ny, nx) bool: the cell's centre is strictly inside the boundary polygon ``boundary[:n]`` (``point_valid``'s
@@ -56,7 +46,8 @@ def inside_cells(boundary: np.ndarray, n: int, origin_x: float, origin_y: float,
 
 @njit(cache=True, error_model="numpy")
 def free_cells_inside(geo, inside: np.ndarray, origin_x: float, origin_y: float, cell_m: float) -> np.ndarray:
-    """``free_cells`` given the boundary half ``inside`` (``inside_cells``): only the obstacles are tested."""
+    """(ny, nx) bool: the reference point is valid at the cell's centre (``point_valid``), given its boundary half
+    ``inside`` (``inside_cells``): only the obstacles are tested here."""
     ny, nx = inside.shape
     free = np.zeros((ny, nx), np.bool_)
     for r in range(ny):
@@ -73,7 +64,7 @@ _boundary_cells: dict[tuple, np.ndarray] = {}
 def boundary_cells(boundary: np.ndarray, origin_x: float, origin_y: float, cell_m: float, nx: int,
                    ny: int) -> np.ndarray:
     """``inside_cells`` of ``boundary`` (its n × 2 vertices) on this grid, computed once per boundary and grid: the
-    boundary test is most of ``free_cells``'s work on a site lot, whose boundary stays while its objects move."""
+    boundary test is most of the free-cell work on a site lot, whose boundary stays while its objects move."""
     verts = np.ascontiguousarray(boundary, dtype=float)
     key = (verts.tobytes(), len(verts), origin_x, origin_y, cell_m, nx, ny)
     mask = _boundary_cells.get(key)

@@ -10,12 +10,14 @@ import math
 
 import numpy as np
 import pytest
+from numba import njit
 from shapely.geometry import LineString, Point
 
 from clip_frames import first_frame  # tests/clip_frames.py
 from np_sim.benchmarks import load_benchmark
 from np_sim.planners.heap import heap_pop, heap_push
-from np_sim.planners.heuristic import boundary_cells, free_cells, free_cells_inside, grid_dijkstra
+from np_sim.kernels.collision import point_valid
+from np_sim.planners.heuristic import boundary_cells, free_cells_inside, grid_dijkstra
 from np_sim.planners.search_kernels import lattice_cell, polyline_distance
 from np_sim.scene_arrays import packed_scene
 
@@ -100,6 +102,16 @@ def test_lattice_cell_bins_position_and_heading():
         it = math.floor((math.remainder(th, 2 * math.pi) + math.pi) / (2 * math.pi) * nth) % nth
         want = (iy * nx + ix) * nth + it if (0 <= ix < nx and 0 <= iy < ny) else -1
         assert lattice_cell(x, y, th, 0.0, 0.0, res, nx, ny, nth) == want
+
+
+@njit(cache=True)
+def free_cells(geo, origin_x: float, origin_y: float, cell_m: float, nx: int, ny: int) -> np.ndarray:
+    """The oracle: (ny, nx) bool, ``point_valid`` at every cell's centre."""
+    free = np.zeros((ny, nx), np.bool_)
+    for r in range(ny):
+        for c in range(nx):
+            free[r, c] = point_valid(geo, 0, origin_x + c * cell_m, origin_y + r * cell_m)
+    return free
 
 
 def test_free_cells_from_a_kept_boundary_mask_are_every_cells_point_test():
