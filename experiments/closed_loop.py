@@ -250,7 +250,8 @@ def planner_notes(names: list[str], config: ClosedLoopConfig) -> list[str]:
     return notes
 
 
-SEARCH_FIELDS = ("search_margin_m", "search_max_expanded", "search_steer_cost_m", "start_limited_clearance")
+SEARCH_FIELDS = ("search_margin_m", "search_max_expanded", "search_steer_cost_m", "start_limited_clearance",
+                 "target_limited_clearance")
 """The `NeuralParkerConfig` fields of the search stage (the difference between the two footprint rows' presets)."""
 
 
@@ -264,9 +265,12 @@ def search_notes(config: NeuralParkerConfig, row: str = "neuralparker_search") -
                      f"convention, at most {config.search_max_expanded} expansions, steering {steer}; "
                      f"planner.{row}.search_margin_m) and returns that plan when it passes the same test; otherwise "
                      f"its sampled and rescue rounds run.")
-    if config.start_limited_clearance:
-        notes.append(f"(The clearance asked of a call's plans is at most its start pose's: "
-                     f"planner.{row}.start_limited_clearance.)")
+    ends = [end for end, on in (("start", config.start_limited_clearance),
+                                ("target", config.target_limited_clearance)) if on]
+    if ends:
+        poses = " and its ".join(f"{end} pose's" for end in ends)
+        keys = ", ".join(f"planner.{row}.{end}_limited_clearance" for end in ends)
+        notes.append(f"(The clearance asked of a call's plans is at most its {poses}: {keys}.)")
     return notes
 
 

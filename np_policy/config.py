@@ -482,6 +482,11 @@ class NeuralParkerConfig:
     ``rescue_stop_m``) and the search (``search_margin_m``) ask of a call's plans is capped by the clearance level of
     its start pose (the ``weights.margins_m`` ladder, 0 below its lowest rung): a plan never keeps more than its
     start, so rounds run to find more from a start closer than that to an object are wasted."""
+    target_limited_clearance: bool = False
+    """The same cap by the clearance level of the scene's target pose: a plan ends at the target, so it keeps no
+    more than the target pose does, and where a slot leaves less than the wanted clearance beside the parked car,
+    the search for the grown body cannot succeed and spent its whole node budget (on the first 94 difficult training
+    clips, 32 of its 38 failed calls)."""
     margin_m: float = 0.0
     """The rollouts' collision checks use the footprint grown by this on every side (m,
     `np_sim.vehicle.VehicleSpec.inflated`); the choice's costs and the validation see the real body."""
@@ -516,11 +521,9 @@ class NeuralParkerConfig:
                 continue
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ConfigError(f"NeuralParkerConfig.{name}: expected a finite number >= 0 m, got {value!r}")
-        if not isinstance(self.start_limited_clearance, bool):
-            raise ConfigError(f"NeuralParkerConfig.start_limited_clearance: expected true or false, got "
-                              f"{self.start_limited_clearance!r}")
-        if not isinstance(self.accept_aligned, bool):
-            raise ConfigError(f"NeuralParkerConfig.accept_aligned: expected true or false, got {self.accept_aligned!r}")
+        for name in ("start_limited_clearance", "target_limited_clearance", "accept_aligned"):
+            if not isinstance(getattr(self, name), bool):
+                raise ConfigError(f"NeuralParkerConfig.{name}: expected true or false, got {getattr(self, name)!r}")
         if self.accept_aligned and self.accept_mean_m is None:
             raise ConfigError("NeuralParkerConfig.accept_aligned: a heading condition on the anytime test needs "
                               "accept_mean_m (the anytime test), got None")
@@ -607,14 +610,14 @@ clips it answered 50 calls where the plain mean rollout answered 36 (0.1 m: 37, 
 5.6 ms (docs/best_of_n.md, 2026-12-03)."""
 
 FOOTPRINT_SEARCH = dataclasses.replace(FOOTPRINT_ANYTIME, search_margin_m=FOOTPRINT_ANYTIME.accept_mean_m,
-                                       start_limited_clearance=True)
+                                       start_limited_clearance=True, target_limited_clearance=True)
 """'footprint_anytime' with a Hybrid A* search between its mean rollouts and its sampled round (beyond the paper; a
 learned-first hybrid, not the learned planner alone): the footprint grown by the anytime test's 0.2 m, at most 2,000
 expansions, steering priced at its drive time, its plan returned when the anytime test accepts it; and the
-clearance asked of a call's plans capped at its start pose's. On the 188 difficult training clips
-(docs/best_of_n.md, 2026-12-06): footprint success 174 against the anytime preset's 170, calls answered by the
-rescue rounds 168 → 50; held out, measured once: 0.94 (0.96) against 0.89 (0.94), the 90th-percentile call 83 ms
-against 1.23 s."""
+clearance asked of a call's plans capped at its start pose's and its target pose's. On the 188 difficult training
+clips (docs/best_of_n.md, 2026-12-06): footprint success 174 against the anytime preset's 170, calls answered by the
+rescue rounds 168 → 50 with the start cap alone; with the target cap too, 175 and 11 rescue calls (the search's
+failures, each spending its whole node budget, 38 → 6 on the first 94)."""
 
 PRESETS: dict[str, NeuralParkerConfig] = {"paper": PAPER, "footprint_best_of_n": FOOTPRINT_BEST_OF_N,
                                           "footprint_anytime": FOOTPRINT_ANYTIME,

@@ -39,7 +39,7 @@ from np_policy.guarded import GuardedRollout
 from np_policy.inference import CompiledActor
 from np_policy.network import ActorCritic
 from np_policy.sampling import (PolicyRollouts, choose, clearance_covers_sweep, clearance_level, curve_surcharge,
-                               steerable)
+                               pose_clearance_level, steerable)
 from np_sim.collision import path_valid
 from np_sim.config import EnvConfig
 from np_sim.errors import ConfigError, StartInCollisionError
@@ -217,11 +217,11 @@ class NeuralParkerPlanner:
 
     def accepted(self, scene: Scene, plan: Plan) -> bool:
         """The validated ``plan`` succeeds, is steerable and keeps ``accept_mean_m`` of clearance (the anytime test;
-        with ``start_limited_clearance`` at most its start's, ``start_limited``); with ``accept_aligned``, it also
-        ends within the choice's heading slack of the target's heading."""
+        at most the ``limited_clearance``); with ``accept_aligned``, it also ends within the choice's heading slack
+        of the target's heading."""
         if not plan.success:
             return False
-        margin = self.start_limited(scene, plan.start, self.config.accept_mean_m)
+        margin = self.limited_clearance(scene, plan.start, self.config.accept_mean_m)
         weights = self.config.weights
         rows = plan.sample(weights.sample_ds_m)
         if self.config.accept_aligned and heading_gap(rows[-1, 2], scene.target[2]) > math.radians(
@@ -247,11 +247,11 @@ class NeuralParkerPlanner:
         return self._anytime_answer_of(scene, plan)
 
     def search_answer(self, scene: Scene, start) -> tuple[Plan | None, bool]:
-        """(the grown-body Hybrid A* plan (``search_margin_m``, with ``start_limited_clearance`` at most the start's
-        clearance), validated with the real body, or None without a search; whether the anytime test accepts it)."""
+        """(the grown-body Hybrid A* plan (``search_margin_m``, at most the ``limited_clearance``), validated with
+        the real body, or None without a search; whether the anytime test accepts it)."""
         if self.config.search_margin_m is None:
             return None, False
-        margin = self.start_limited(scene, start, self.config.search_margin_m)
+        margin = self.limited_clearance(scene, start, self.config.search_margin_m)
         return self._anytime_answer(scene, self.search_at(margin).plan(scene, start))
 
     def search_at(self, margin_m: float) -> HybridAStar:
@@ -260,20 +260,24 @@ class NeuralParkerPlanner:
             self.searches[margin_m] = search_fallback(self.body, self.config, margin_m)
         return self.searches[margin_m]
 
-    def start_limited(self, scene: Scene, start, wanted_m: float) -> float:
-        """``wanted_m``, or with ``start_limited_clearance`` at most the clearance level of the ``start`` pose (the
-        ``weights.margins_m`` ladder, 0 below its lowest rung): no path from there keeps more."""
-        if not self.config.start_limited_clearance or wanted_m <= 0.0:
-            return wanted_m
-        pose = np.asarray(start, float)[None, :3]
-        return min(wanted_m, max(0.0, clearance_level(scene, pose, self.body, self.config.weights.margins_m)))
+    def limited_clearance(self, scene: Scene, start, wanted_m: float) -> float:
+        """``wanted_m``, capped with ``start_limited_clearance`` at the clearance level of the ``start`` pose and with
+        ``target_limited_clearance`` at the target's (the ``weights.margins_m`` ladder, 0 below its lowest rung): no
+        path from that start, or to that target, keeps more."""
+        ends = [start] * self.config.start_limited_clearance + [scene.target] * self.config.target_limited_clearance
+        for pose in ends:
+            if wanted_m <= 0.0:
+                break
+            level = pose_clearance_level(scene, pose, self.body, self.config.weights.margins_m)
+            wanted_m = min(wanted_m, max(0.0, level))
+        return wanted_m
 
     def accept_implies_valid(self, scene: Scene, plan: Plan) -> bool:
         """Whether the anytime test (``accepted``) of ``plan`` implies the claim check (``claimed``), so that an
         accepted plan is not validated a second time (`np_policy.sampling.clearance_covers_sweep`)."""
         if self.config.accept_mean_m is None or self.convention != "footprint":
             return False
-        margin = self.start_limited(scene, plan.start, self.config.accept_mean_m)
+        margin = self.limited_clearance(scene, plan.start, self.config.accept_mean_m)
         return clearance_covers_sweep(self.body, margin, self.config.weights.sample_ds_m, self.kappa_limit)
 
     def _anytime_answer_of(self, scene: Scene, plan: Plan | None) -> tuple[Plan | None, bool]:
@@ -326,9 +330,9 @@ class NeuralParkerPlanner:
         return self.config.rescue_clearance_m if k == 0 or stop is None else stop
 
     def _too_close(self, scene: Scene, plan: Plan, clearance_m: float) -> bool:
-        """The plan's clearance level (the ``weights.margins_m`` ladder) is below ``clearance_m`` (``start_limited``);
-        never for 0."""
-        clearance_m = self.start_limited(scene, plan.start, clearance_m)
+        """The plan's clearance level (the ``weights.margins_m`` ladder) is below ``clearance_m``
+        (``limited_clearance``); never for 0."""
+        clearance_m = self.limited_clearance(scene, plan.start, clearance_m)
         if clearance_m <= 0.0:
             return False
         weights = self.config.weights

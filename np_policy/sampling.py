@@ -135,6 +135,20 @@ def clearance_level(scene: Scene, poses: np.ndarray, vehicle: VehicleSpec, margi
     return -1.0
 
 
+_POSE_LEVELS: "weakref.WeakKeyDictionary[Scene, dict]" = weakref.WeakKeyDictionary()
+
+
+def pose_clearance_level(scene: Scene, pose, vehicle: VehicleSpec, margins: Sequence[float]) -> float:
+    """``clearance_level`` of the one pose (x, y, θ), cached per scene object (scenes are immutable; a planner call
+    asks it of its start and target several times)."""
+    row = np.asarray(pose, float)[:3]
+    key = (row.tobytes(), vehicle, tuple(margins))
+    levels = _POSE_LEVELS.setdefault(scene, {})
+    if key not in levels:
+        levels[key] = clearance_level(scene, row[None, :], vehicle, margins)
+    return levels[key]
+
+
 def clearance_covers_sweep(vehicle: VehicleSpec, margin_m: float, ds_m: float, kappa_limit: float) -> bool:
     """Whether a path whose footprint grown by ``margin_m`` (`VehicleSpec.inflated`) is free at samples at most
     ``ds_m`` apart along it, with |path curvature| ≤ ``kappa_limit``, is free when swept continuously (the exact

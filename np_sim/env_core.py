@@ -17,10 +17,10 @@ from np_sim.kernels.collision import pose_valid
 from np_sim.kernels.geometry import beam_offsets
 from np_sim.kernels.hermite import hermite_basis
 from np_sim.lidar import footprint_ranges
-from np_sim.nearest import NearestObjects, exceeds_slots
+from np_sim.nearest import exceeds_slots, nearest_objects
 from np_sim.observation import bev_encoder, observation_sections, observation_size, static_slots
 from np_sim.scene import Scene
-from np_sim.scene_arrays import pack_scenes
+from np_sim.scene_arrays import pack_scenes, packed_scene
 from np_sim.starts import StartSampler, UniformStartSampler
 
 
@@ -114,9 +114,9 @@ class BatchCore:
             raise ConfigError(f"environment: num_envs must be >= 1, got {num_envs}")
         self.num_envs = int(num_envs)
         self.config = config
-        self.arrays = pack_scenes(self.scenes)
+        self.arrays = packed_scene(self.scenes[0]) if len(self.scenes) == 1 else pack_scenes(self.scenes)
         self.geo = self.arrays.geometry
-        selectors = [NearestObjects(s, config.observation) if nearest and exceeds_slots(s, config.observation)
+        selectors = [nearest_objects(s, config.observation) if nearest and exceeds_slots(s, config.observation)
                      else None for s in self.scenes]
         # raises CapacityError naming the scene and the limit (never truncates)
         self.static_obs = np.stack([static_slots(s, config.observation) if sel is None else sel.static_row()

@@ -14,6 +14,7 @@ are not relaxed: a scene beyond them is still a `CapacityError`.
 from __future__ import annotations
 
 import dataclasses
+import weakref
 
 import numpy as np
 
@@ -30,21 +31,23 @@ def exceeds_slots(scene: Scene, config: ObservationConfig) -> bool:
 
 
 class NearestObjects:
-    """The obstacle slots of an over-capacity scene as a function of the vehicle pose (module docstring)."""
+    """The obstacle slots of an over-capacity scene as a function of the vehicle pose (module docstring). It keeps
+    no reference to the scene, so that `nearest_objects` can cache it by the scene."""
 
     def __init__(self, scene: Scene, config: ObservationConfig):
         # every limit but the obstacle count still holds (CapacityError naming it otherwise)
         scene.check_capacity(dataclasses.replace(config.capacity(), max_obstacles=len(scene.obstacles)),
                              source=scene.name or "<scene>")
-        self.scene, self.config = scene, config
+        self.config = config
         polygons = scene.polygons_for_observation()
-        vertices = config.vertices_per_obstacle
-        self._rows = np.stack([to_target_frame(p, scene.target)[np.arange(vertices) % len(p)].reshape(-1)
-                               for p in polygons])
         self._counts = np.array([len(p) for p in polygons], np.int64)
         self._verts = np.zeros((len(polygons), int(self._counts.max()), 2))
         for j, p in enumerate(polygons):
             self._verts[j, : len(p)] = p
+        cyclic = np.arange(config.vertices_per_obstacle)[None, :] % self._counts[:, None]
+        local = to_target_frame(self._verts, scene.target)
+        self._rows = np.take_along_axis(local, cyclic[:, :, None], axis=1).reshape(len(polygons), -1)
+        self._static = self._static_row(scene)
 
     def indices(self, poses) -> np.ndarray:
         """(m, max_obstacles) scene indices of the obstacles each pose row (x, y[, θ]) observes, nearest first."""
@@ -62,11 +65,26 @@ class NearestObjects:
     def static_row(self) -> np.ndarray:
         """The scene-constant tail of the flat observation with the obstacle slots at the sentinel (they are
         written per pose by ``slots``) and the boundary slots as usual."""
+        return self._static
+
+    def _static_row(self, scene: Scene) -> np.ndarray:
         parts = []
         if self.config.use_obstacles:
             parts.append(np.full(self.config.max_obstacles * 2 * self.config.vertices_per_obstacle,
                                  self.config.sentinel))
         if self.config.use_boundary:
-            bare = Scene(self.scene.boundary, (), self.scene.target, None, name=self.scene.name)
+            bare = Scene(scene.boundary, (), scene.target, None, name=scene.name)
             parts.append(boundary_slots(bare, self.config).reshape(-1))
         return np.concatenate(parts) if parts else np.zeros(0)
+
+
+_SELECTORS: "weakref.WeakKeyDictionary[Scene, dict[ObservationConfig, NearestObjects]]" = weakref.WeakKeyDictionary()
+
+
+def nearest_objects(scene: Scene, config: ObservationConfig) -> NearestObjects:
+    """``NearestObjects(scene, config)``, cached per scene object and observation config (scenes are immutable;
+    a planner call builds several rollout envs on one scene)."""
+    by_config = _SELECTORS.setdefault(scene, {})
+    if config not in by_config:
+        by_config[config] = NearestObjects(scene, config)
+    return by_config[config]

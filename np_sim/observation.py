@@ -77,10 +77,12 @@ def obstacle_slots(scene: Scene, config: ObservationConfig) -> np.ndarray:
     """(max_obstacles, 2·vertices) target-frame obstacle slots of s^p and s^o (sentinel-padded)."""
     scene.check_capacity(config.capacity(), source=scene.name or "<scene>")
     slots = np.full((config.max_obstacles, 2 * config.vertices_per_obstacle), config.sentinel)
-    for j, verts in enumerate(scene.polygons_for_observation()):
-        local = to_target_frame(verts, scene.target)
-        cyclic = local[np.arange(config.vertices_per_obstacle) % len(local)]
-        slots[j] = cyclic.reshape(-1)
+    polygons = scene.polygons_for_observation()
+    if polygons:
+        # each polygon's vertices repeated cyclically to the slot's vertex count, all moved in one call
+        cyclic = np.concatenate([np.asarray(v, float)[np.arange(config.vertices_per_obstacle) % len(v)]
+                                 for v in polygons])
+        slots[: len(polygons)] = to_target_frame(cyclic, scene.target).reshape(len(polygons), -1)
     return slots
 
 

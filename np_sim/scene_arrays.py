@@ -55,7 +55,7 @@ class SceneArrays:
 
 
 def _closed_ring_segments(verts: np.ndarray) -> np.ndarray:
-    nxt = np.roll(verts, -1, axis=0)
+    nxt = np.concatenate([verts[1:], verts[:1]])
     return np.concatenate([verts, nxt], axis=1)
 
 

@@ -223,7 +223,7 @@ def test_stitch_flag_reaches_the_clip_runs_config_and_table(tmp_path):
     assert result["records"][0]["footprint_success"]
 
 
-def test_the_notes_name_the_search_stage_and_the_start_limited_clearance():
+def test_the_notes_name_the_search_stage_and_the_endpoint_limited_clearance():
     from experiments.closed_loop import footprint_notes, planner_notes
 
     notes = " ".join(footprint_notes(FOOTPRINT_SEARCH))
@@ -231,6 +231,16 @@ def test_the_notes_name_the_search_stage_and_the_start_limited_clearance():
             "steering priced at its drive time; planner.neuralparker_footprint.search_margin_m) and returns that plan "
             "when it passes the same test; otherwise its sampled and rescue rounds run.") in notes
     assert "(The clearance asked of a call's plans is at most its start pose's" in notes
+    start_only = dataclasses.replace(FOOTPRINT_SEARCH, start_limited_clearance=True, target_limited_clearance=False)
+    both_ends = dataclasses.replace(start_only, target_limited_clearance=True)
+    target_only = dataclasses.replace(start_only, start_limited_clearance=False, target_limited_clearance=True)
+    assert ("(The clearance asked of a call's plans is at most its start pose's: "
+            "planner.neuralparker_footprint.start_limited_clearance.)") in footprint_notes(start_only)
+    assert ("(The clearance asked of a call's plans is at most its start pose's and its target pose's: "
+            "planner.neuralparker_footprint.start_limited_clearance, "
+            "planner.neuralparker_footprint.target_limited_clearance.)") in footprint_notes(both_ends)
+    assert ("(The clearance asked of a call's plans is at most its target pose's: "
+            "planner.neuralparker_footprint.target_limited_clearance.)") in footprint_notes(target_only)
     assert "steering at 0.1 m;" in " ".join(footprint_notes(dataclasses.replace(FOOTPRINT_SEARCH,
                                                                                  search_steer_cost_m=0.1)))
     assert "Hybrid A*" not in " ".join(footprint_notes(FOOTPRINT_ANYTIME))

@@ -65,6 +65,7 @@ def test_the_search_runs_only_after_the_mean_rollouts_and_a_failed_one_changes_n
     ({"search_max_expanded": 0}, r"search_max_expanded: expected an integer >= 1"),
     ({"search_max_expanded": 2.5}, r"search_max_expanded: expected an integer >= 1"),
     ({"start_limited_clearance": 1}, r"start_limited_clearance: expected true or false"),
+    ({"target_limited_clearance": "yes"}, r"target_limited_clearance: expected true or false"),
 ])
 def test_bad_search_settings_are_refused(fields, message):
     with pytest.raises(ConfigError, match=message):
@@ -97,11 +98,28 @@ def test_start_limited_clearance_asks_no_more_than_the_start_pose_keeps(policy):
     scene, start = first_frame(35)
     expected = next(rung for rung in (0.2, 0.1, 0.0) if _inflated_free(scene, start, planner.body.inflated(rung)))
     assert expected < 0.2
-    assert planner.start_limited(scene, start, 0.2) == expected
-    assert _planner(policy, search_margin_m=0.2).start_limited(scene, start, 0.2) == 0.2  # off: as asked
+    assert planner.limited_clearance(scene, start, 0.2) == expected
+    assert _planner(policy, search_margin_m=0.2).limited_clearance(scene, start, 0.2) == 0.2  # off: as asked
     plan = planner.plan(scene, start)
     assert plan.success and shapely_clearance(scene, plan.sample(0.05), planner.body) >= expected - 1e-9
     assert validation_failure(scene, plan, "footprint", planner.body) == ""
+
+
+def test_target_limited_clearance_asks_no_more_than_the_target_pose_keeps(policy):
+    """Training clip 68's slot leaves less than 0.2 m beside the parked car while its start keeps 0.2 m: with
+    the target cap the clearance asked is the highest rung whose grown rectangle shapely finds free at the target,
+    the start cap alone asks 0.2 m, and the planner's plan keeps the capped clearance."""
+    scene, start = first_frame(68)
+    both = _planner(policy, search_margin_m=0.2, start_limited_clearance=True, target_limited_clearance=True)
+    at_target = next(rung for rung in (0.2, 0.1, 0.0)
+                     if _inflated_free(scene, scene.target, both.body.inflated(rung)))
+    assert at_target < 0.2 and _inflated_free(scene, start, both.body.inflated(0.2))
+    assert both.limited_clearance(scene, start, 0.2) == at_target
+    start_only = _planner(policy, search_margin_m=0.2, start_limited_clearance=True)
+    assert start_only.limited_clearance(scene, start, 0.2) == 0.2
+    plan = both.plan(scene, start)
+    assert plan.success and shapely_clearance(scene, plan.sample(0.05), both.body) >= at_target - 1e-9
+    assert validation_failure(scene, plan, "footprint", both.body) == ""
 
 
 def test_the_search_prices_curvature_as_the_choice_prices_drive_time(policy):
