@@ -179,14 +179,13 @@ def _lrslr(x: float, y: float, phi: float, sp: float, cp: float, out: np.ndarray
 
 
 @njit(cache=True, error_model="numpy")
-def _base_word(k: int, x: float, y: float, phi: float, out: np.ndarray) -> bool:
+def _base_word(k: int, x: float, y: float, phi: float, sp: float, cp: float, out: np.ndarray) -> bool:
     """Solve base word k (Reeds–Shepp formula 8.1–8.11, the rows of ``_BASE_LETTERS``) for the normalised goal
-    (x, y, φ).
+    (x, y, φ), with (sp, cp) = (sin φ, cos φ).
 
     Writes the signed normalised piece lengths into ``out`` (5,) and returns whether the word exists with the
     gear pattern of its name.
     """
-    sp, cp = math.sin(phi), math.cos(phi)
     if k == 0:
         return _lsl(x, y, phi, sp, cp, out)
     if k == 1:
@@ -205,15 +204,26 @@ def _base_word(k: int, x: float, y: float, phi: float, out: np.ndarray) -> bool:
 
 
 @njit(cache=True, error_model="numpy")
-def _solve_symmetric(k: int, backwards: int, sym: int, x: float, y: float, xb: float, yb: float, phi: float,
-                     buf: np.ndarray) -> bool:
-    """Solve base word k for the normalised goal (x, y, φ) under one symmetry (``backwards``, with (xb, yb) the
-    backwards image of (x, y); timeflip = ``sym & 1``, reflect = ``sym >> 1``): base lengths into ``buf``."""
-    bx, by = (xb, yb) if backwards else (x, y)
+def _goal_images(x: float, y: float, phi: float) -> np.ndarray:
+    """What every symmetric image of the normalised goal (x, y, φ) needs, computed once: (x, y, the backwards image
+    xb, yb, φ, sin φ, cos φ, sin −φ, cos −φ) (the trigonometry of −φ is evaluated, not derived, so each base
+    formula sees exactly the values it would compute itself)."""
+    cphi, sphi = math.cos(phi), math.sin(phi)
+    return np.array([x, y, x * cphi + y * sphi, x * sphi - y * cphi, phi, sphi, cphi, math.sin(-phi),
+                     math.cos(-phi)])
+
+
+@njit(cache=True, error_model="numpy")
+def _solve_symmetric(k: int, backwards: int, sym: int, goal: np.ndarray, buf: np.ndarray) -> bool:
+    """Solve base word k for the normalised goal (`_goal_images`) under one symmetry (``backwards``; timeflip =
+    ``sym & 1``, reflect = ``sym >> 1``): base lengths into ``buf``."""
+    bx, by = (goal[2], goal[3]) if backwards else (goal[0], goal[1])
     timeflip, reflect = sym & 1, sym >> 1
     qx = -bx if timeflip else bx
     qy = -by if reflect else by
-    return _base_word(k, qx, qy, -phi if timeflip != reflect else phi, buf)
+    if timeflip != reflect:
+        return _base_word(k, qx, qy, -goal[4], goal[7], goal[8], buf)
+    return _base_word(k, qx, qy, goal[4], goal[5], goal[6], buf)
 
 
 @njit(cache=True, error_model="numpy")
@@ -235,16 +245,39 @@ def all_words(x: float, y: float, phi: float, letters: np.ndarray, lengths: np.n
     and backwards): letters (48, 5), signed normalised lengths (48, 5) and piece counts (48,) filled in generation
     order; returns the number of words."""
     buf = np.empty(MAX_PIECES)
-    cphi, sphi = math.cos(phi), math.sin(phi)
-    xb, yb = x * cphi + y * sphi, x * sphi - y * cphi
+    goal = _goal_images(x, y, phi)
     w = 0
     for k in range(N_BASES):
         for backwards in range(2 if _HAS_BACKWARDS[k] else 1):
             for sym in range(4):
-                if _solve_symmetric(k, backwards, sym, x, y, xb, yb, phi, buf):
+                if _solve_symmetric(k, backwards, sym, goal, buf):
                     counts[w] = _write_word(k, backwards, sym, buf, letters[w], lengths[w])
                     w += 1
     return w
+
+
+@njit(cache=True, error_model="numpy")
+def _shortest(x: float, y: float, phi: float, buf: np.ndarray):
+    """(base word, backwards, symmetry) of the shortest Reeds–Shepp word to the normalised goal (x, y, φ) over all
+    48 words (the first of equal length in `all_words`' order), its base lengths left in ``buf``; base −1 when
+    none exists."""
+    best = np.inf
+    best_k, best_backwards, best_sym = -1, 0, 0
+    goal = _goal_images(x, y, phi)
+    for k in range(N_BASES):
+        for backwards in range(2 if _HAS_BACKWARDS[k] else 1):
+            for sym in range(4):
+                if not _solve_symmetric(k, backwards, sym, goal, buf):
+                    continue
+                total = 0.0
+                for i in range(_N_PIECES[k]):
+                    total += abs(buf[i])
+                if total < best:
+                    best = total
+                    best_k, best_backwards, best_sym = k, backwards, sym
+    if best_k >= 0:
+        _solve_symmetric(best_k, best_backwards, best_sym, goal, buf)
+    return best_k, best_backwards, best_sym
 
 
 @njit(cache=True, error_model="numpy")
@@ -255,22 +288,8 @@ def shortest_word(x: float, y: float, phi: float, letters: np.ndarray, lengths: 
     Fills ``letters`` (5,) int64 and ``lengths`` (5,) float (signed, normalised) and returns the piece count.
     """
     buf = np.empty(MAX_PIECES)
-    best = np.inf
-    n_best = 0
-    cphi, sphi = math.cos(phi), math.sin(phi)
-    xb, yb = x * cphi + y * sphi, x * sphi - y * cphi
-    for k in range(N_BASES):
-        for backwards in range(2 if _HAS_BACKWARDS[k] else 1):
-            for sym in range(4):
-                if not _solve_symmetric(k, backwards, sym, x, y, xb, yb, phi, buf):
-                    continue
-                total = 0.0
-                for i in range(_N_PIECES[k]):
-                    total += abs(buf[i])
-                if total < best:
-                    best = total
-                    n_best = _write_word(k, backwards, sym, buf, letters, lengths)
-    return n_best
+    k, backwards, sym = _shortest(x, y, phi, buf)
+    return 0 if k < 0 else _write_word(k, backwards, sym, buf, letters, lengths)
 
 
 @njit(cache=True, error_model="numpy")
@@ -283,14 +302,15 @@ def relative_goal(x0: float, y0: float, th0: float, x1: float, y1: float, th1: f
 
 @njit(cache=True, error_model="numpy")
 def rs_length(x0: float, y0: float, th0: float, x1: float, y1: float, th1: float, kappa_max: float) -> float:
-    """Length (m) of the shortest Reeds–Shepp path between two poses at curvature bound κ_max."""
+    """Length (m) of the shortest Reeds–Shepp path between two poses at curvature bound κ_max (summed in the
+    word's piece order, as its arcs are)."""
     x, y, phi = relative_goal(x0, y0, th0, x1, y1, th1, kappa_max)
-    letters = np.empty(MAX_PIECES, np.int64)
-    lengths = np.empty(MAX_PIECES)
-    n = shortest_word(x, y, phi, letters, lengths)
+    buf = np.empty(MAX_PIECES)
+    k, backwards, _ = _shortest(x, y, phi, buf)
+    n = 0 if k < 0 else _N_PIECES[k]
     total = 0.0
     for i in range(n):
-        total += abs(lengths[i])
+        total += abs(buf[n - 1 - i] if backwards else buf[i])
     return total / kappa_max
 
 

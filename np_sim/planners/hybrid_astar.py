@@ -232,6 +232,8 @@ class HybridAStar:
         node_pose, node_g = np.empty((capacity, 3)), np.empty(capacity)
         node_parent, node_arc, node_cell = (np.empty(capacity, np.int64), np.empty((capacity, 2)),
                                             np.empty(capacity, np.int64))
+        node_exact = np.empty(capacity, np.bool_)
+        node_exact[0] = True  # the start's key 0 puts it first; no other node is open yet
         heap_keys, heap_ids = np.empty(capacity), np.empty(capacity, np.int64)
         cell_stamp, cell_g, closed_stamp = self._cell_arrays(int(np.prod(maps.n_lattice)))
         start_cell = sk.lattice_cell(p[0], p[1], p[2], *maps.lattice, *maps.n_lattice)
@@ -252,7 +254,8 @@ class HybridAStar:
                                      grid.distance, grid.origin, grid.cell_m, guide, c.guide_weight, c.guide_cap_m,
                                      c.analytic_every,
                                      c.analytic_near_m, node_pose, node_g, node_parent, node_arc, node_cell,
-                                     cell_stamp, cell_g, closed_stamp, heap_keys, heap_ids, state, allowance, rs_out)
+                                     node_exact, cell_stamp, cell_g, closed_stamp, heap_keys, heap_ids, state,
+                                     allowance, rs_out)
             if status == sk.CHUNK_DONE and (state[sk.S_EXPANDED] >= c.max_expanded
                                             or time.perf_counter() - t0 > c.time_budget_s):
                 break

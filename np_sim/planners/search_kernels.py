@@ -11,6 +11,11 @@ Node priority f = g + w_h·h + w_g·d_guide, with
 * d_guide: distance from the node's position to a guide polyline, saturated at a cap (NP-Guided A*, paper §IV-B),
   0 without a guide.
 
+A successor enters the open list keyed by f with the grid term alone in place of h (``heuristic_bound``, a lower
+bound: the Reeds–Shepp length is most of a node's cost to open and most opened nodes are never expanded); when it is
+popped its full h is computed, and it is pushed back with the full f when that is larger. A node is therefore
+expanded only when its full f is the least in the open list, the order eager evaluation gives (up to ties).
+
 Every arc (primitive or analytic Reeds–Shepp piece) is checked by the rule its plan is scored by (``arc_scored``):
 under the reference-point convention the env's own check at the paper's n samples per arc (``arc_valid``), under
 the footprint convention the exact swept test of ``np_sim.kernels.swept``, which also implies the env's sampled
@@ -111,6 +116,17 @@ def heuristic(x: float, y: float, th: float, gx: float, gy: float, gth: float, k
 
 
 @njit(cache=True, error_model="numpy")
+def heuristic_bound(x: float, y: float, region_m: float, hgrid: np.ndarray, h_origin_x: float, h_origin_y: float,
+                    h_cell_m: float) -> float:
+    """A lower bound of ``heuristic`` that needs no Reeds–Shepp length: its grid term (all of it for a region
+    goal)."""
+    hol = grid_lookup(hgrid, h_origin_x, h_origin_y, h_cell_m, x, y)
+    if region_m > 0.0:
+        return max(0.0, hol - region_m)
+    return hol
+
+
+@njit(cache=True, error_model="numpy")
 def rs_shot(geo, x: float, y: float, th: float, gx: float, gy: float, gth: float, kappa_max: float,
             n_samples: int, footprint: bool, local: np.ndarray, corners: np.ndarray, hit: np.ndarray,
             rs_out: np.ndarray) -> int:
@@ -191,11 +207,12 @@ def push_successors(i: int, geo, footprint: bool, local: np.ndarray, goal: np.nd
                     hgrid: np.ndarray, h_origin: np.ndarray, h_cell_m: float,
                     use_guide: bool, guide: np.ndarray, guide_weight: float, guide_cap_m: float,
                     node_pose: np.ndarray, node_g: np.ndarray, node_parent: np.ndarray, node_arc: np.ndarray,
-                    node_cell: np.ndarray, cell_stamp: np.ndarray, cell_g: np.ndarray, closed_stamp: np.ndarray,
-                    heap_keys: np.ndarray, heap_ids: np.ndarray, state: np.ndarray,
+                    node_cell: np.ndarray, node_exact: np.ndarray, cell_stamp: np.ndarray, cell_g: np.ndarray,
+                    closed_stamp: np.ndarray, heap_keys: np.ndarray, heap_ids: np.ndarray, state: np.ndarray,
                     corners: np.ndarray, hit: np.ndarray) -> bool:
     """Open the successor of node ``i`` along each primitive whose end lies in an unclosed lattice cell, improves
-    that cell's best g, passes ``arc_scored`` and has a finite h; False when the node arrays are full."""
+    that cell's best g, passes ``arc_scored`` and has a finite h, keyed by ``heuristic_bound`` (``expand`` puts
+    the full h in when it pops it); False when the node arrays are full."""
     x, y, th = node_pose[i, 0], node_pose[i, 1], node_pose[i, 2]
     parent_kappa, parent_len = node_arc[i, 0], node_arc[i, 1]
     stamp = state[S_STAMP]
@@ -211,8 +228,7 @@ def push_successors(i: int, geo, footprint: bool, local: np.ndarray, goal: np.nd
             continue
         if not arc_scored(geo, x, y, th, kappa, length, n_samples, footprint, local, corners, hit):
             continue
-        h = heuristic(nx_, ny_, nth_, goal[0], goal[1], goal[2], kappa_max, region_m, hgrid, h_origin[0],
-                      h_origin[1], h_cell_m)
+        h = heuristic_bound(nx_, ny_, region_m, hgrid, h_origin[0], h_origin[1], h_cell_m)
         if not math.isfinite(h):
             continue
         k = state[S_N_NODES]
@@ -221,6 +237,7 @@ def push_successors(i: int, geo, footprint: bool, local: np.ndarray, goal: np.nd
         state[S_N_NODES] = k + 1
         store_node(k, nx_, ny_, nth_, g, i, kappa, length, c, stamp, node_pose, node_g, node_parent, node_arc,
                    node_cell, cell_stamp, cell_g)
+        node_exact[k] = region_m > 0.0  # a region goal's h is the grid term alone
         f = node_priority(g, h, costs[4], nx_, ny_, use_guide, guide, guide_weight, guide_cap_m)
         state[S_HEAP_SIZE] = heap_push(heap_keys, heap_ids, state[S_HEAP_SIZE], f, k)
     return True
@@ -233,9 +250,9 @@ def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.
            hgrid: np.ndarray, h_origin: np.ndarray, h_cell_m: float,
            guide: np.ndarray, guide_weight: float, guide_cap_m: float, analytic_every: int, analytic_near_m: float,
            node_pose: np.ndarray, node_g: np.ndarray, node_parent: np.ndarray, node_arc: np.ndarray,
-           node_cell: np.ndarray, cell_stamp: np.ndarray, cell_g: np.ndarray, closed_stamp: np.ndarray,
-           heap_keys: np.ndarray, heap_ids: np.ndarray, state: np.ndarray, max_expanded: int,
-           rs_out: np.ndarray):
+           node_cell: np.ndarray, node_exact: np.ndarray, cell_stamp: np.ndarray, cell_g: np.ndarray,
+           closed_stamp: np.ndarray, heap_keys: np.ndarray, heap_ids: np.ndarray, state: np.ndarray,
+           max_expanded: int, rs_out: np.ndarray):
     """Run Hybrid A* expansions until a goal, an empty open list, ``max_expanded`` total expansions or full node
     arrays; returns (status, node).
 
@@ -251,11 +268,21 @@ def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.
     while state[S_HEAP_SIZE] > 0:
         if state[S_EXPANDED] >= max_expanded:
             return CHUNK_DONE, -1
-        _, i, size = heap_pop(heap_keys, heap_ids, state[S_HEAP_SIZE])
+        key, i, size = heap_pop(heap_keys, heap_ids, state[S_HEAP_SIZE])
         state[S_HEAP_SIZE] = size
         cell = node_cell[i]
         if closed_stamp[cell] == stamp:
             continue
+        if not node_exact[i]:
+            # the key was a lower bound of f: with the full h, expand now only if it is still the least key
+            node_exact[i] = True
+            x, y, th = node_pose[i, 0], node_pose[i, 1], node_pose[i, 2]
+            h = heuristic(x, y, th, goal[0], goal[1], goal[2], kappa_max, region_m, hgrid, h_origin[0], h_origin[1],
+                          h_cell_m)
+            f = node_priority(node_g[i], h, costs[4], x, y, use_guide, guide, guide_weight, guide_cap_m)
+            if f > key:
+                state[S_HEAP_SIZE] = heap_push(heap_keys, heap_ids, state[S_HEAP_SIZE], f, i)
+                continue
         closed_stamp[cell] = stamp
         state[S_EXPANDED] += 1
         x, y, th = node_pose[i, 0], node_pose[i, 1], node_pose[i, 2]
@@ -270,7 +297,7 @@ def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.
                 return FOUND_ANALYTIC, i
         if not push_successors(i, geo, footprint, local, goal, prims, costs, kappa_max, n_samples, region_m,
                                lattice, n_lattice, hgrid, h_origin, h_cell_m, use_guide, guide, guide_weight,
-                               guide_cap_m, node_pose, node_g, node_parent, node_arc, node_cell, cell_stamp, cell_g,
-                               closed_stamp, heap_keys, heap_ids, state, corners, hit):
+                               guide_cap_m, node_pose, node_g, node_parent, node_arc, node_cell, node_exact,
+                               cell_stamp, cell_g, closed_stamp, heap_keys, heap_ids, state, corners, hit):
             return NODES_FULL, -1
     return EXHAUSTED, -1

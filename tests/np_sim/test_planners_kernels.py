@@ -1,7 +1,7 @@
 """Compiled pieces of the planners against slow exact versions on seeded random inputs: the heap (vs heapq), the
 guide distance (vs shapely), the holonomic grid Dijkstra (vs a plain-Python Dijkstra with the same step rules),
 the free cells from a kept boundary mask (vs every cell's ``point_valid``) and the lattice binning (vs its
-formula)."""
+formula), and the open list's lower-bound key (vs the full heuristic)."""
 
 from __future__ import annotations
 
@@ -17,8 +17,8 @@ from clip_frames import first_frame  # tests/clip_frames.py
 from np_sim.benchmarks import load_benchmark
 from np_sim.planners.heap import heap_pop, heap_push
 from np_sim.kernels.collision import point_valid
-from np_sim.planners.heuristic import boundary_cells, free_cells_inside, grid_dijkstra
-from np_sim.planners.search_kernels import lattice_cell, polyline_distance
+from np_sim.planners.heuristic import boundary_cells, free_cells_inside, grid_dijkstra, holonomic_grid
+from np_sim.planners.search_kernels import heuristic, heuristic_bound, lattice_cell, polyline_distance
 from np_sim.scene_arrays import packed_scene
 
 
@@ -134,3 +134,26 @@ def test_free_cells_from_a_kept_boundary_mask_are_every_cells_point_test():
     args = (float(lo[0]), float(lo[1]), 0.25, 20, 10)
     assert boundary_cells(site[0], *args) is boundary_cells(site[1].copy(), *args)
     assert boundary_cells(site[0], *args) is not boundary_cells(site[0], float(lo[0]), float(lo[1]), 0.5, 20, 10)
+
+
+def test_the_open_lists_key_never_exceeds_the_full_heuristic():
+    """Hybrid A* keys a new node with ``heuristic_bound`` and computes the full h only when it is popped; that
+    order is A*'s only if the bound never exceeds h: at random poses on a benchmark scene's grid it does not, it
+    equals the grid term where that dominates, and for a region goal (no Reeds–Shepp term) it is h itself."""
+    scene = load_benchmark("factorial", "test")[0]
+    goal = np.asarray(scene.target, float)
+    grid = holonomic_grid(packed_scene(scene).geometry, np.asarray(scene.boundary, float), goal[:2], 0.25)
+    rng = np.random.default_rng(3)
+    lo, hi = np.min(scene.boundary, axis=0), np.max(scene.boundary, axis=0)
+    equal = 0
+    for x, y, th in zip(rng.uniform(lo[0], hi[0], 400), rng.uniform(lo[1], hi[1], 400), rng.uniform(-4, 4, 400)):
+        for region in (0.0, 3.0):
+            args = (grid.distance, grid.origin[0], grid.origin[1], grid.cell_m)
+            bound = heuristic_bound(x, y, region, *args)
+            full = heuristic(x, y, th, goal[0], goal[1], goal[2], 0.68, region, *args)
+            assert bound <= full or (math.isinf(bound) and math.isinf(full))
+            if region > 0:
+                assert bound == full or (math.isinf(bound) and math.isinf(full))
+            else:
+                equal += bound == full
+    assert 0 < equal < 400  # both terms dominate somewhere
