@@ -251,8 +251,9 @@ def planner_notes(names: list[str], config: ClosedLoopConfig) -> list[str]:
 
 
 SEARCH_FIELDS = ("search_margin_m", "search_max_expanded", "search_steer_cost_m", "start_limited_clearance",
-                 "target_limited_clearance")
-"""The `NeuralParkerConfig` fields of the search stage (the difference between the two footprint rows' presets)."""
+                 "target_limited_clearance", "mean_capped")
+"""The `NeuralParkerConfig` fields in which the search row's preset differs from the learned row's: the search
+stage, the clearance caps and the capped plain mean rollout."""
 
 
 def search_notes(config: NeuralParkerConfig, row: str = "neuralparker_search") -> list[str]:
@@ -271,6 +272,9 @@ def search_notes(config: NeuralParkerConfig, row: str = "neuralparker_search") -
         poses = " and its ".join(f"{end} pose's" for end in ends)
         keys = ", ".join(f"planner.{row}.{end}_limited_clearance" for end in ends)
         notes.append(f"(The clearance asked of a call's plans is at most its {poses}: {keys}.)")
+    if config.mean_capped:
+        notes.append(f"(Its plain mean rollout also ends as a timeout after {config.rollout_max_arcs} arcs: "
+                     f"planner.{row}.mean_capped.)")
     return notes
 
 
@@ -305,9 +309,9 @@ def footprint_notes(footprint: NeuralParkerConfig, row: str = "neuralparker_foot
     if footprint.rollout_max_arcs is not None and (footprint.samples or footprint.rescue):
         grown = ", grown-body mean" if footprint.mean_margin_m else ""
         guarded = ", guarded" if footprint.guard_sigmas else ""
+        plain = "" if footprint.mean_capped else ", its plain mean rollout at the policy env's budget"
         notes.append(f"{name}'s sampled{grown}{guarded} and rescue rollouts end as timeouts after "
-                     f"{footprint.rollout_max_arcs} arcs, its plain mean rollout at the policy env's budget "
-                     f"({key}.rollout_max_arcs).")
+                     f"{footprint.rollout_max_arcs} arcs{plain} ({key}.rollout_max_arcs).")
     if footprint.connector:
         notes.append(f"{name}'s terminal connector: {footprint.connector} "
                      f"(centred = the fixed nine candidates, target-aligned first).")

@@ -436,7 +436,11 @@ class NeuralParkerConfig:
     """Arc budget of the ``samples`` rollouts, the rescue rounds', the grown-body mean rollout's and the guarded
     rollout's (at most the checkpoint env's ``episode.max_arcs``): one still running after this many arcs ends as a
     timeout, so the rounds step at most (``samples`` + the rescue rounds' rollouts) × this many envs per call. None =
-    the env's budget (200 arcs for the site checkpoints), which the plain mean rollout always keeps."""
+    the env's budget (200 arcs for the site checkpoints), which the plain mean rollout keeps unless ``mean_capped``."""
+    mean_capped: bool = False
+    """Anytime play (with ``accept_mean_m``), beyond the paper: the plain mean rollout keeps ``rollout_max_arcs`` too,
+    so a call whose mean rollout wanders stops it there (a timeout) instead of at the env's budget; only a rollout
+    that would end after that many arcs changes. False = the env's budget, as the paper's planner plays it."""
     accept_mean_m: float | None = None
     """Anytime play: the mean rollout is returned at once, before any sampling, when it succeeds, passes the
     validation, is steerable (``weights.curvature_tolerance``) and keeps its footprint grown by this (m) off every
@@ -451,8 +455,8 @@ class NeuralParkerConfig:
     this on every side (m; the policy observes the grown body and the checks use it, so a success keeps about this
     much clearance) and returned when the anytime test accepts it; otherwise the plain mean rollout follows as
     without it, and both are candidates of the sampled round. Skipped where the grown body's start is in collision.
-    It keeps the arc budget ``rollout_max_arcs`` (the plain mean rollout keeps the env's). 0 = the plain mean
-    rollout only."""
+    It keeps the arc budget ``rollout_max_arcs`` (the plain mean rollout the env's, unless ``mean_capped``). 0 =
+    the plain mean rollout only."""
     guard_sigmas: tuple[float, ...] = ()
     """Anytime play (with ``accept_mean_m``): after the grown-body mean rollout and before the plain one, the guarded
     mean rollout (`np_policy.guarded`: each arc, of the mean action and offsets of these multiples of the policy's
@@ -547,6 +551,12 @@ class NeuralParkerConfig:
                 or self.search_max_expanded < 1):
             raise ConfigError(f"NeuralParkerConfig.search_max_expanded: expected an integer >= 1, got "
                               f"{self.search_max_expanded!r}")
+        if not isinstance(self.mean_capped, bool):
+            raise ConfigError(f"NeuralParkerConfig.mean_capped: expected true or false, got {self.mean_capped!r}")
+        if self.mean_capped and (self.accept_mean_m is None or self.rollout_max_arcs is None):
+            raise ConfigError("NeuralParkerConfig.mean_capped: capping the plain mean rollout needs anytime play "
+                              f"(accept_mean_m, got {self.accept_mean_m!r}) and an arc budget (rollout_max_arcs, got "
+                              f"{self.rollout_max_arcs!r})")
         if self.rescue_stop_m is not None and self.rescue_stop_m > self.rescue_clearance_m:
             raise ConfigError(f"NeuralParkerConfig.rescue_stop_m: expected at most rescue_clearance_m "
                               f"({self.rescue_clearance_m:g} m), got {self.rescue_stop_m!r}")
@@ -611,14 +621,16 @@ clips it answered 50 calls where the plain mean rollout answered 36 (0.1 m: 37, 
 5.6 ms (docs/best_of_n.md, 2026-12-03)."""
 
 FOOTPRINT_SEARCH = dataclasses.replace(FOOTPRINT_ANYTIME, search_margin_m=FOOTPRINT_ANYTIME.accept_mean_m,
-                                       start_limited_clearance=True, target_limited_clearance=True)
+                                       start_limited_clearance=True, target_limited_clearance=True, mean_capped=True)
 """'footprint_anytime' with a Hybrid A* search between its mean rollouts and its sampled round (beyond the paper; a
 learned-first hybrid, not the learned planner alone): the footprint grown by the anytime test's 0.2 m, at most 2,000
 expansions, steering priced at its drive time, its plan returned when the anytime test accepts it; and the
 clearance asked of a call's plans capped at its start pose's and its target pose's. On the 188 difficult training
 clips (docs/best_of_n.md, 2026-12-06): footprint success 174 against the anytime preset's 170, calls answered by the
 rescue rounds 168 → 50 with the start cap alone; with the target cap too, 175 and 11 rescue calls (the search's
-failures, each spending its whole node budget, 38 → 6 on the first 94)."""
+failures, each spending its whole node budget, 38 → 6 on the first 94). Its plain mean rollout keeps the 50-arc budget
+(``mean_capped``): on the same clips the same 175 parked, clip for clip, and a third of the searched calls no longer
+first play a 200-arc wandering mean rollout (about 25 ms each; docs/best_of_n.md, 2026-12-06 evening)."""
 
 PRESETS: dict[str, NeuralParkerConfig] = {"paper": PAPER, "footprint_best_of_n": FOOTPRINT_BEST_OF_N,
                                           "footprint_anytime": FOOTPRINT_ANYTIME,

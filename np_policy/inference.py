@@ -10,7 +10,9 @@ A batch of ``TORCH_BATCH`` or more observations (the footprint planner's sampled
 torch model instead: its batched forward does the products over all rows at once, about three times the rows per
 second of the compiled kernel at batches of 32–128 with one thread, where the compiled kernel pays a small product
 per layer and row (``python -m np_policy.bench_actor``). The actions agree to float32 rounding, not bit for bit;
-a batch of one (the paper's planner, the mean rollout) always takes the compiled kernel.
+a batch of one (the paper's planner, the mean rollout) always takes the compiled kernel, and a whole mean rollout of
+one env runs as one compiled loop of the actor and the env's step (``CompiledActor.mean_rollout``): the per-arc
+Python round trip (array checks, two kernel dispatches) cost about as much as the network and the step themselves.
 
 Layout: the weights are flattened into two typed lists, matrices (in × out, so ``x @ W``) and vectors (biases,
 LayerNorm gains and offsets), in exactly the order ``_mean_action`` consumes them; ``_export`` is the one place
@@ -28,6 +30,7 @@ from numba.typed import List
 from torch import nn
 
 import np_sim.kernels  # noqa: F401  (sets numba's cache directory)
+from np_sim.kernels import step as K
 from np_policy.network import ActorCritic, SelfAttentionBlock
 
 
@@ -141,6 +144,29 @@ def _mean_actions(obs, mats, vecs, sections, shape, eps):
     return out
 
 
+@njit(cache=True, error_model="numpy")
+def _mean_rollout(geo, targets, static_obs, S, P, local, b_ranges, off_c, off_s, offsets, headings, scales0, scales1,
+                  basis, dbasis, pts, kbar_max, dk, lengths, costs, obs, R, mats, vecs, sections, shape, eps, actions):
+    """Env 0 of a batched env core stepped by its mean action (``_mean_action``, then the env's ``step_one``) until
+    it terminates or reaches its arc budget; each normalised action into a row of ``actions``. Returns the number of
+    arcs, or −(that number) when the last action was not finite (its step not taken)."""
+    n = 0
+    while True:
+        action = _mean_action(obs[0], mats, vecs, sections, shape, eps)
+        a0 = np.float64(action[0])
+        a1 = np.float64(action[1])
+        actions[n, 0] = a0
+        actions[n, 1] = a1
+        n += 1
+        if not (np.isfinite(a0) and np.isfinite(a1)):
+            return -n
+        K.step_one(geo, targets, static_obs, S, P, 0, a0 * P[K.P_KAPPA_MAX], a1 * P[K.P_LENGTH_MAX], local, b_ranges,
+                   off_c, off_s, offsets, headings, scales0, scales1, basis, dbasis, pts[0], kbar_max[0], dk[0],
+                   lengths[0], costs[0], obs[0], R[0])
+        if R[0, K.R_TERMINATED] > 0.0 or R[0, K.R_TRUNCATED] > 0.0:
+            return n
+
+
 def _export(model: ActorCritic) -> tuple[List, List]:
     """The weights in ``_mean_action``'s consumption order (matrices transposed to in × out)."""
     mats, vecs = List(), List()
@@ -221,3 +247,23 @@ class CompiledActor:
         if len(obs) >= TORCH_BATCH or self.torch_only:
             return self.model.mean_action(torch.from_numpy(obs)).numpy()
         return _mean_actions(obs, self.mats, self.vecs, self.sections, self.shape, self.eps)
+
+    def plays_rollout(self, core) -> bool:
+        """Whether ``mean_rollout`` can play in ``core`` (an `np_sim.env_core.BatchCore`): one env, the compiled
+        kernel, and an observation the step kernel writes whole (no nearest-object slots, no BEV latent)."""
+        return core.num_envs == 1 and not self.torch_only and not core.selectors and core.bev is None
+
+    def mean_rollout(self, core) -> np.ndarray:
+        """(arcs, 2) normalised actions of env 0's mean rollout in ``core`` from its current state (reset first;
+        ``plays_rollout`` must hold), ``core`` left at its end: the batched loop of `np_policy.sampling` with a batch
+        of one and zero noise, arc for arc, in one compiled call (module docstring). ValueError on a non-finite
+        action, as the env's step raises."""
+        actions = np.empty((int(core.P[K.P_MAX_ARCS]), 2))
+        n = _mean_rollout(core.geo, core.arrays.targets, core.static_obs, core.S, core.P, core.local, core.b_ranges,
+                          core.off_c, core.off_s, core.offsets, core.headings, core.scales0, core.scales1, core.basis,
+                          core.dbasis, core.h_pts, core.h_kbar_max, core.h_dk, core.h_len, core.h_cost, core.obs,
+                          core.R, self.mats, self.vecs, self.sections, self.shape, self.eps, actions)
+        if n < 0:
+            raise ValueError(f"step: action[0] = {actions[-n - 1].tolist()} lies outside the action space [-1, 1]^2 "
+                             "(the env never clips; clip or squash in the policy)")
+        return actions[:n]

@@ -148,8 +148,9 @@ class NeuralParkerPlanner:
         self.convention = self.env_config.collision
         std = self.model.log_std.detach().exp().numpy()
         nearest = config.over_capacity == "nearest"
-        self.mean = PolicyRollouts(self.actor, np.zeros(2), self.env_config, nearest=nearest)
         capped = rollout_env(self.env_config, config.rollout_max_arcs)
+        self.mean = PolicyRollouts(self.actor, np.zeros(2), capped if config.mean_capped else self.env_config,
+                                   nearest=nearest)
         grown = (rollout_env(dataclasses.replace(self.env_config,
                                                  vehicle=self.env_config.vehicle.inflated(config.mean_margin_m)),
                              config.rollout_max_arcs) if config.mean_margin_m else None)

@@ -107,6 +107,12 @@ class PolicyRollouts:
         rows = np.arange(self.n)
         core.reset_envs(rows, rng, 0, start)
         scale = np.array([self.config.vehicle.kappa_max, self.config.episode.max_length_m])
+        plays_rollout = getattr(self.actor, "plays_rollout", None)  # a `CompiledActor` plays it in one call
+        if not self.std.any() and self.first_arc == "policy" and plays_rollout is not None and plays_rollout(core):
+            mean_arcs = self.actor.mean_rollout(core) * scale  # the loop below's plan, in one compiled call
+            reason = end_reason(core, 0)
+            return [Plan(start=start, arcs=mean_arcs, hermite=hermite_of(core, 0, scene), success=not reason,
+                         reason=reason)]
         arcs: list[list[np.ndarray]] = [[] for _ in rows]
         plans: list[Plan | None] = [None] * self.n
         alive = np.ones(self.n, bool)
@@ -115,7 +121,8 @@ class PolicyRollouts:
             live = np.flatnonzero(alive)
             actions = np.asarray(self._actions(core.obs[live], rng, first), np.float64)
             first = False
-            core.step(actions, live)  # finished rollouts are not stepped
+            # finished rollouts are not stepped; while all live, the step takes every env (no rows to check)
+            core.step(actions, None if len(live) == self.n else live)
             for row, action in zip(live, actions):
                 arcs[row].append(action * scale)
                 if core.R[row, K.R_TERMINATED] > 0 or core.R[row, K.R_TRUNCATED] > 0:

@@ -4,13 +4,15 @@ arrays (STYLE §5)."""
 
 from __future__ import annotations
 
+import functools
 import math
+import weakref
 from collections.abc import Sequence
 
 import numpy as np
 
 from np_sim.bev import render_bev_batch
-from np_sim.config import EnvConfig
+from np_sim.config import EnvConfig, ObservationConfig
 from np_sim.errors import ConfigError, StartInCollisionError
 from np_sim.kernels import step as K
 from np_sim.kernels.collision import pose_valid
@@ -97,6 +99,28 @@ def step_outcome(R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return R[:, K.R_REWARD].astype(np.float32), R[:, K.R_TERMINATED] > 0, R[:, K.R_TRUNCATED] > 0
 
 
+@functools.lru_cache(maxsize=64)
+def config_arrays(config: EnvConfig) -> tuple:
+    """What ``BatchCore`` reads from ``config`` alone, built once per config and shared by its cores (never
+    written): obstacle columns, observation size, ``P``, footprint, LiDAR body ranges and beam offsets, connector
+    candidates and Hermite basis. A planner builds a core per perceived scene, so this is per-call work saved."""
+    ob, cn = config.observation, config.connector
+    return (observation_sections(ob).get("obstacles"), observation_size(ob), kernel_parameters(config),
+            config.vehicle.footprint_local(), footprint_ranges(config.vehicle, ob.n_beams), *beam_offsets(ob.n_beams),
+            *cn.arrays(), *hermite_basis(cn.n_samples))
+
+
+_STATIC_ROWS: "weakref.WeakKeyDictionary[Scene, dict]" = weakref.WeakKeyDictionary()
+
+
+def scene_static_row(scene: Scene, config: ObservationConfig) -> np.ndarray:
+    """`np_sim.observation.static_slots` of ``scene``, cached per scene and observation config (callers copy it)."""
+    rows = _STATIC_ROWS.setdefault(scene, {})
+    if config not in rows:
+        rows[config] = static_slots(scene, config)
+    return rows[config]
+
+
 class BatchCore:
     """State of ``num_envs`` episodes over a list of scenes, stepped by one compiled call."""
 
@@ -119,19 +143,13 @@ class BatchCore:
         selectors = [nearest_objects(s, config.observation) if nearest and exceeds_slots(s, config.observation)
                      else None for s in self.scenes]
         # raises CapacityError naming the scene and the limit (never truncates)
-        self.static_obs = np.stack([static_slots(s, config.observation) if sel is None else sel.static_row()
+        self.static_obs = np.stack([scene_static_row(s, config.observation) if sel is None else sel.static_row()
                                     for s, sel in zip(self.scenes, selectors)])
         self.selectors = [(k, sel) for k, sel in enumerate(selectors) if sel is not None]
-        self.obstacle_columns = observation_sections(config.observation).get("obstacles")
-        self.obs_size = observation_size(config.observation)
-        self.P = kernel_parameters(config)
-        self.local = config.vehicle.footprint_local()
-        self.b_ranges = footprint_ranges(config.vehicle, config.observation.n_beams)
-        self.off_c, self.off_s = beam_offsets(config.observation.n_beams)
-        self.sampler = UniformStartSampler(self.scenes, config.vehicle, arrays=self.arrays) if start_sampler is None else start_sampler
+        (self.obstacle_columns, self.obs_size, self.P, self.local, self.b_ranges, self.off_c, self.off_s, self.offsets,
+         self.headings, self.scales0, self.scales1, self.basis, self.dbasis) = config_arrays(config)
+        self._sampler = start_sampler
         cn = config.connector
-        self.offsets, self.headings, self.scales0, self.scales1 = cn.arrays()
-        self.basis, self.dbasis = hermite_basis(cn.n_samples)
         n, c = self.num_envs, cn.n_candidates
         self.h_pts = np.empty((n, c, 2, cn.n_samples))
         self.h_kbar_max = np.empty((n, c))
@@ -144,6 +162,18 @@ class BatchCore:
         self._corners = np.empty((4, 2))
         self.bev = bev_encoder(config.observation) if config.observation.use_bev else None
         self._all = np.arange(n)
+
+    @property
+    def sampler(self) -> StartSampler:
+        """The start sampler: the one given, else the full-range sampler over the scenes, built when first asked
+        (a planner's cores start from given poses and never need one)."""
+        if self._sampler is None:
+            self._sampler = UniformStartSampler(self.scenes, self.config.vehicle, arrays=self.arrays)
+        return self._sampler
+
+    @sampler.setter
+    def sampler(self, sampler: StartSampler) -> None:
+        self._sampler = sampler
 
     # ------------------------------------------------------------------------------------------------------------
     def reset_envs(self, env_ids: np.ndarray, rng: np.random.Generator, scene_index=None, start=None) -> None:

@@ -89,10 +89,16 @@ def pack_scenes(scenes: list[Scene] | tuple[Scene, ...]) -> SceneArrays:
         b = np.asarray(scene.boundary, float)
         boundary[k, : len(b)] = b
         n_boundary[k] = len(b)
-        for j, v in enumerate(polys[k]):
-            poly[k, j, : len(v)] = v
-            poly_nv[k, j] = len(v)
-            poly_aabb[k, j] = (v[:, 0].min(), v[:, 1].min(), v[:, 0].max(), v[:, 1].max())
+        if polys[k]:
+            # each polygon's rows padded with its first vertex, so that one reduction gives every box
+            edge_padded = np.empty((len(polys[k]), v_max, 2))
+            for j, v in enumerate(polys[k]):
+                poly[k, j, : len(v)] = v
+                poly_nv[k, j] = len(v)
+                edge_padded[j, : len(v)] = v
+                edge_padded[j, len(v):] = v[0]
+            poly_aabb[k, : len(polys[k]), :2] = edge_padded.min(axis=1)
+            poly_aabb[k, : len(polys[k]), 2:] = edge_padded.max(axis=1)
         n_poly[k] = len(polys[k])
         for j, c in enumerate(circles[k]):
             circle[k, j] = (c.center[0], c.center[1], c.radius)

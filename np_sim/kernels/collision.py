@@ -25,7 +25,7 @@ from np_sim.kernels.geometry import (
 )
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def point_valid(geo, k: int, px: float, py: float) -> bool:
     """Reference-point convention for one point of scene k."""
     if point_in_polygon(px, py, geo[0][k], geo[1][k]) != INSIDE:
@@ -33,7 +33,7 @@ def point_valid(geo, k: int, px: float, py: float) -> bool:
     return point_clear_of_obstacles(geo, k, px, py)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def point_clear_of_obstacles(geo, k: int, px: float, py: float) -> bool:
     """The obstacle half of ``point_valid``: the point is strictly outside every obstacle of scene k."""
     poly, poly_nv, n_poly, aabb, circle, n_circle = geo[2], geo[3], geo[4], geo[5], geo[6], geo[7]
@@ -78,7 +78,7 @@ def rect_inside_boundary(corners: np.ndarray, verts: np.ndarray, n: int) -> bool
     return not polygon_edges_cross(corners, 4, verts, n)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def footprint_valid(geo, k: int, x: float, y: float, th: float, local: np.ndarray, corners: np.ndarray) -> bool:
     """Footprint convention for the vehicle rectangle ``local`` (4, 2) at pose (x, y, θ); ``corners`` is scratch."""
     boundary, n_boundary, poly, poly_nv, n_poly, aabb, circle, n_circle = geo[0], geo[1], geo[2], geo[3], geo[4], geo[5], geo[6], geo[7]
@@ -100,7 +100,7 @@ def footprint_valid(geo, k: int, x: float, y: float, th: float, local: np.ndarra
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def pose_valid(geo, k: int, x: float, y: float, th: float, footprint: bool, local: np.ndarray,
                corners: np.ndarray) -> bool:
     """One pose under the chosen convention (``footprint`` False = reference point)."""

@@ -416,21 +416,26 @@ def _seg_seg_dist(ax, ay, bx, by, cx, cy, dx, dy):
 
 
 @njit(cache=True, error_model="numpy")
-def _body_ring_dist(body, n_body, ring, n_ring):
-    """Distance between the body's edges (its point when n_body = 1) and the closed ring's edges."""
-    best = math.inf
+def _ring_within(body, n_body, ring, n_ring, reach, lo_x, hi_x, lo_y, hi_y):
+    """Some edge of the closed ring lies within ``reach`` of the body's edges (its point when n_body = 1). An edge
+    whose bounding box misses the body's box grown by ``reach`` ([lo_x, hi_x] × [lo_y, hi_y]) is farther than
+    ``reach`` along one axis and is skipped."""
     for j in range(n_ring):
         ax = ring[j, 0]
         ay = ring[j, 1]
         bx = ring[(j + 1) % n_ring, 0]
         by = ring[(j + 1) % n_ring, 1]
+        if max(ax, bx) < lo_x or min(ax, bx) > hi_x or max(ay, by) < lo_y or min(ay, by) > hi_y:
+            continue
         if n_body == 1:
-            best = min(best, _seg_point_dist(ax, ay, bx, by, body[0, 0], body[0, 1])[0])
+            if _seg_point_dist(ax, ay, bx, by, body[0, 0], body[0, 1])[0] <= reach:
+                return True
             continue
         for i in range(n_body):
             i2 = (i + 1) % n_body
-            best = min(best, _seg_seg_dist(ax, ay, bx, by, body[i, 0], body[i, 1], body[i2, 0], body[i2, 1]))
-    return best
+            if _seg_seg_dist(ax, ay, bx, by, body[i, 0], body[i, 1], body[i2, 0], body[i2, 1]) <= reach:
+                return True
+    return False
 
 
 @njit(cache=True, error_model="numpy")
@@ -444,12 +449,12 @@ def body_clear(geo, k, body, n_body, margin, hit):
     for i in range(n_body):
         if point_in_polygon(body[i, 0], body[i, 1], boundary[k], n_boundary[k]) != INSIDE:
             return _flag(hit, KIND_BOUNDARY, 0, body[i, 0], body[i, 1])
-    if _body_ring_dist(body, n_body, boundary[k], n_boundary[k]) <= reach:
-        return _flag(hit, KIND_BOUNDARY, 0, body[0, 0], body[0, 1])
     lo_x = body[:n_body, 0].min() - reach
     hi_x = body[:n_body, 0].max() + reach
     lo_y = body[:n_body, 1].min() - reach
     hi_y = body[:n_body, 1].max() + reach
+    if _ring_within(body, n_body, boundary[k], n_boundary[k], reach, lo_x, hi_x, lo_y, hi_y):
+        return _flag(hit, KIND_BOUNDARY, 0, body[0, 0], body[0, 1])
     for j in range(n_poly[k]):
         if aabb[k, j, 2] < lo_x or aabb[k, j, 0] > hi_x or aabb[k, j, 3] < lo_y or aabb[k, j, 1] > hi_y:
             continue
@@ -458,7 +463,7 @@ def body_clear(geo, k, body, n_body, margin, hit):
         inside = point_in_polygon(body[0, 0], body[0, 1], ring, nv) != OUTSIDE
         if n_body > 1 and point_in_polygon(ring[0, 0], ring[0, 1], body, n_body) != OUTSIDE:
             inside = True
-        if inside or _body_ring_dist(body, n_body, ring, nv) <= reach:
+        if inside or _ring_within(body, n_body, ring, nv, reach, lo_x, hi_x, lo_y, hi_y):
             return _flag(hit, KIND_POLYGON, j, body[0, 0], body[0, 1])
     for j in range(n_circle[k]):
         ox = circle[k, j, 0]

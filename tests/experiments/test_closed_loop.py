@@ -241,6 +241,9 @@ def test_the_notes_name_the_search_stage_and_the_endpoint_limited_clearance():
             "planner.neuralparker_footprint.target_limited_clearance.)") in footprint_notes(both_ends)
     assert ("(The clearance asked of a call's plans is at most its target pose's: "
             "planner.neuralparker_footprint.target_limited_clearance.)") in footprint_notes(target_only)
+    assert ("(Its plain mean rollout also ends as a timeout after 50 arcs: planner.neuralparker_footprint.mean_capped.)"
+            in notes and "its plain mean rollout at the policy env's budget" not in notes)
+    assert "mean_capped" not in " ".join(footprint_notes(FOOTPRINT_ANYTIME))
     assert "steering at 0.1 m;" in " ".join(footprint_notes(dataclasses.replace(FOOTPRINT_SEARCH,
                                                                                  search_steer_cost_m=0.1)))
     assert "Hybrid A*" not in " ".join(footprint_notes(FOOTPRINT_ANYTIME))

@@ -137,12 +137,13 @@ def test_presets_are_the_documented_recipes_and_round_trip_through_json():
     """'paper' is the mean rollout with the checkpoint's connector; 'footprint_best_of_n' is the recipe of
     docs/planners.md (32 samples, rescue rounds 128 at 2 σ, 128 at 3 σ, 128 with uniform first arcs at 1 σ, the
     rescue for clearance below 0.2 m, the centred connector); 'footprint_search' is 'footprint_anytime' with the
-    0.2 m search and the clearance capped at the start's and the target's; every preset survives to_dict → JSON →
-    from_dict."""
+    0.2 m search, the clearance capped at the start's and the target's and the plain mean rollout capped at 50 arcs;
+    every preset survives to_dict → JSON → from_dict."""
     assert PRESETS == {"paper": PAPER, "footprint_best_of_n": FOOTPRINT_BEST_OF_N,
                        "footprint_anytime": FOOTPRINT_ANYTIME, "footprint_search": FOOTPRINT_SEARCH}
     assert FOOTPRINT_SEARCH == dataclasses.replace(FOOTPRINT_ANYTIME, search_margin_m=0.2,
-                                                   start_limited_clearance=True, target_limited_clearance=True)
+                                                   start_limited_clearance=True, target_limited_clearance=True,
+                                                   mean_capped=True)
     assert (PAPER.action, PAPER.samples, PAPER.rescue, PAPER.connector, PAPER.margin_m) == ("mean", 0, (), None, 0.0)
     best = FOOTPRINT_BEST_OF_N
     assert (best.samples, best.connector, best.rescue_clearance_m) == (32, "centred", 0.2)

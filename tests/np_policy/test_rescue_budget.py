@@ -54,6 +54,27 @@ def test_the_arc_budget_reaches_the_sampled_and_rescue_rollouts_only(policy):
         NeuralParkerConfig(rollout_max_arcs=0)
 
 
+def test_mean_capped_gives_the_plain_mean_rollout_the_arc_budget_too(policy):
+    """With ``mean_capped`` the plain mean rollout ends as a timeout at ``rollout_max_arcs`` like the other rounds:
+    training clip 60's mean rollout takes more than 2 arcs, so under a budget of 2 it is its first 2 arcs, a
+    timeout; the preset without the flag keeps the env's 200. The flag needs anytime play and a budget."""
+    scene, start = first_frame(60)
+    free = NeuralParkerPlanner(policy, dataclasses.replace(FOOTPRINT_ANYTIME, rollout_max_arcs=2))
+    capped = NeuralParkerPlanner(policy, dataclasses.replace(FOOTPRINT_ANYTIME, rollout_max_arcs=2, mean_capped=True))
+    assert (free.mean.config.episode.max_arcs, capped.mean.config.episode.max_arcs) == (200, 2)
+    whole, cut = free._mean_rollout(scene, start), capped._mean_rollout(scene, start)
+    assert len(whole.arcs) > 2
+    assert (cut.success, cut.reason) == (False, "timeout")
+    np.testing.assert_array_equal(cut.arcs, whole.arcs[:2])
+    with pytest.raises(ConfigError, match=r"mean_capped: capping the plain mean rollout needs anytime play "
+                                          r"\(accept_mean_m, got None\)"):
+        NeuralParkerConfig(rollout_max_arcs=50, mean_capped=True)
+    with pytest.raises(ConfigError, match=r"an arc budget \(rollout_max_arcs, got None\)"):
+        dataclasses.replace(FOOTPRINT_ANYTIME, rollout_max_arcs=None, mean_capped=True)
+    with pytest.raises(ConfigError, match=r"mean_capped: expected true or false, got 1"):
+        dataclasses.replace(FOOTPRINT_ANYTIME, mean_capped=1)
+
+
 def _rounds_run(policy, config: NeuralParkerConfig, scene, start):
     """The plan of a planner of ``config`` and the indices of the rescue rounds it ran."""
     planner, ran = NeuralParkerPlanner(policy, config), []

@@ -269,19 +269,24 @@ def _env_rollout(planner, scene, start) -> np.ndarray:
 
 
 def test_the_mean_rollout_is_the_batch_of_one_and_matches_a_plain_env_loop(problem, sampled):
-    """The paper's planner (zero noise, one row of the batched rollout) plays exactly the arcs a step-by-step
-    ``ParkingEnv`` loop of the same compiled policy plays, bit for bit; a zero-noise batch of several rows repeats
-    it in every row and draws no noise."""
+    """The paper's planner (zero noise, one row of the batched rollout, played as one compiled loop) plays exactly
+    the arcs a step-by-step ``ParkingEnv`` loop of the same compiled policy plays, bit for bit; a zero-noise batch of
+    several rows (the per-arc batched loop) repeats it in every row, Hermite segment included, and draws no
+    noise."""
     scene, start = problem
     clip = next(c for c in load_clips("eval") if c.name == "eval-1000009")
     cases = [(scene, start), (clip.frame_scene(0, pose=clip.start), np.asarray(clip.start, float))]
     for case_scene, case_start in cases:
+        assert sampled.actor.plays_rollout(sampled.mean._core(case_scene))
         plan = sampled._mean_rollout(case_scene, case_start)
         np.testing.assert_array_equal(plan.arcs, _env_rollout(sampled, case_scene, case_start))
         batch = PolicyRollouts(sampled.actor, np.zeros(2), sampled.env_config, 3, seed=11)(case_scene, case_start)
         for row in batch:
             np.testing.assert_array_equal(row.arcs, plan.arcs)
             assert (row.success, row.reason) == (plan.success, plan.reason)
+            assert (row.hermite is None) == (plan.hermite is None)
+            if plan.hermite is not None:
+                np.testing.assert_array_equal(row.hermite.points, plan.hermite.points)
     assert {p.success for p in (sampled._mean_rollout(s, q) for s, q in cases)} == {True, False}
 
 
@@ -333,3 +338,17 @@ def test_rollouts_step_only_the_live_rows_and_equal_stepping_every_row(problem, 
             assert plan.hermite is None
         else:
             np.testing.assert_array_equal(plan.hermite.points, from_target_frame(hermite.T, scene.target))
+
+
+def test_a_non_finite_mean_action_is_refused_as_the_env_refuses_it(problem, sampled):
+    """The compiled mean-rollout loop checks each action as the env's step does: a policy whose output is NaN
+    raises the env's error instead of stepping."""
+    import copy
+
+    scene, start = problem
+    actor = copy.copy(sampled.actor)
+    actor.vecs = type(sampled.actor.vecs)([v.copy() for v in sampled.actor.vecs])
+    actor.vecs[len(actor.vecs) - 1][:] = np.nan  # the actor's output bias
+    rollouts = PolicyRollouts(actor, np.zeros(2), sampled.env_config)
+    with pytest.raises(ValueError, match=r"action\[0\] = \[nan, nan\] lies outside the action space"):
+        rollouts(scene, start)

@@ -25,6 +25,7 @@ from hypothesis import strategies as st
 from shapely.geometry import Point, Polygon
 
 from np_sim.kernels.collision import footprint_valid, point_valid, pose_valid, poses_valid, rect_inside_boundary
+from np_sim.kernels import swept
 from np_sim.kernels.geometry import footprint_corners
 from np_sim.scene import PolygonObstacle, Scene
 from np_sim.scene_arrays import pack_scenes
@@ -342,3 +343,40 @@ def test_bodies_near_and_across_slanted_edges_match_shapely():
 @given(st.floats(-10.0, 56.0), st.floats(-10.0, 34.0), st.floats(-math.pi, math.pi))
 def test_random_poses_against_a_notched_lot_match_shapely(x, y, th):
     _check_notched([(x, y, th)])
+
+
+def oracle_body_clear(scene: Scene, body, reach: float) -> bool | None:
+    """``swept.body_clear``'s rule from shapely: the body strictly inside the boundary and farther than ``reach``
+    from the boundary and from every obstacle; None when a distance lies within 1e-7 m of ``reach`` (rounding)."""
+    distances = [shapely.distance(Polygon(scene.boundary).exterior, body)]
+    for o in scene.obstacles:
+        if isinstance(o, PolygonObstacle):
+            distances.append(shapely.distance(Polygon(o.vertices), body))
+        else:
+            distances.append(shapely.distance(Point(o.center), body) - o.radius)
+    if any(abs(d - reach) < 1e-7 for d in distances):
+        return None
+    return bool(Polygon(scene.boundary).contains_properly(body)) and all(d > reach for d in distances)
+
+
+def test_body_clear_matches_shapely_for_rectangles_and_points(packed):
+    # the kernel skips boundary and obstacle edges whose boxes lie beyond reach of the body's box: every verdict
+    # must still equal the distance rule over all edges
+    scenes, arrays = packed
+    geo = arrays.geometry
+    rng = np.random.default_rng(10)
+    hit = np.zeros(4)
+    seen = set()
+    for k, scene in enumerate(scenes):
+        for x, y, th in query_poses(rng, scene, 120):
+            margin = float(rng.choice([0.0, rng.uniform(0.0, 0.6)]))
+            reach = margin + swept.EXACT_TOLERANCE_M
+            rect = np.empty((4, 2))
+            footprint_corners(x, y, th, LOCAL, rect)
+            for body, n_body, shape in ((rect, 4, Polygon(rect)), (np.array([[x, y]] * 4), 1, Point(x, y))):
+                want = oracle_body_clear(scene, shape, reach)
+                if want is None:
+                    continue
+                assert bool(swept.body_clear(geo, k, body, n_body, margin, hit)) == want, (k, x, y, th, margin, n_body)
+                seen.add((n_body, want))
+    assert seen == {(4, True), (4, False), (1, True), (1, False)}
