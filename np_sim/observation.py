@@ -22,6 +22,8 @@ that ``np_policy.bev_encoder`` registers here when it is imported (``np_policy.n
 
 from __future__ import annotations
 
+import functools
+
 from collections.abc import Callable
 from typing import Protocol
 
@@ -76,33 +78,50 @@ def section_shapes(config: ObservationConfig) -> dict[str, tuple[int, ...]]:
 def obstacle_slots(scene: Scene, config: ObservationConfig) -> np.ndarray:
     """(max_obstacles, 2·vertices) target-frame obstacle slots of s^p and s^o (sentinel-padded)."""
     scene.check_capacity(config.capacity(), source=scene.name or "<scene>")
+    return _obstacle_slots(scene, config)
+
+
+def _obstacle_slots(scene: Scene, config: ObservationConfig) -> np.ndarray:
     slots = np.full((config.max_obstacles, 2 * config.vertices_per_obstacle), config.sentinel)
     polygons = scene.polygons_for_observation()
     if polygons:
         # each polygon's vertices repeated cyclically to the slot's vertex count, all moved in one call
-        cyclic = np.concatenate([np.asarray(v, float)[np.arange(config.vertices_per_obstacle) % len(v)]
+        cyclic = np.concatenate([np.asarray(v, float)[_cyclic_index(len(v), config.vertices_per_obstacle)]
                                  for v in polygons])
         slots[: len(polygons)] = to_target_frame(cyclic, scene.target).reshape(len(polygons), -1)
     return slots
 
 
+@functools.lru_cache(maxsize=64)
+def _cyclic_index(n: int, slots: int) -> np.ndarray:
+    """Vertex indices 0, 1, …, n−1, 0, 1, … filling ``slots`` places."""
+    return np.arange(slots) % n
+
+
 def boundary_slots(scene: Scene, config: ObservationConfig) -> np.ndarray:
     """(max_boundary_segments, 4) target-frame boundary segments of s^b (sentinel-padded)."""
     scene.check_capacity(config.capacity(), source=scene.name or "<scene>")
-    segs = scene.boundary_segments()
+    return _boundary_slots(scene, config)
+
+
+def _boundary_slots(scene: Scene, config: ObservationConfig) -> np.ndarray:
+    # segment i joins vertex i to vertex i+1 (`Scene.boundary_segments`); each vertex is moved once
+    ends = to_target_frame(scene.boundary, scene.target)
     slots = np.full((config.max_boundary_segments, 4), config.sentinel)
-    slots[: len(segs), 0:2] = to_target_frame(segs[:, 0:2], scene.target)
-    slots[: len(segs), 2:4] = to_target_frame(segs[:, 2:4], scene.target)
+    slots[: len(ends), 0:2] = ends
+    slots[: len(ends) - 1, 2:4] = ends[1:]
+    slots[len(ends) - 1, 2:4] = ends[0]
     return slots
 
 
 def static_slots(scene: Scene, config: ObservationConfig) -> np.ndarray:
     """The scene-constant tail of the flat observation (obstacle then boundary slots, as enabled)."""
+    scene.check_capacity(config.capacity(), source=scene.name or "<scene>")
     parts = []
     if config.use_obstacles:
-        parts.append(obstacle_slots(scene, config).reshape(-1))
+        parts.append(_obstacle_slots(scene, config).reshape(-1))
     if config.use_boundary:
-        parts.append(boundary_slots(scene, config).reshape(-1))
+        parts.append(_boundary_slots(scene, config).reshape(-1))
     return np.concatenate(parts) if parts else np.zeros(0)
 
 

@@ -54,9 +54,15 @@ class SceneArrays:
         return int(self.targets.shape[0])
 
 
-def _closed_ring_segments(verts: np.ndarray) -> np.ndarray:
-    nxt = np.concatenate([verts[1:], verts[:1]])
-    return np.concatenate([verts, nxt], axis=1)
+def _rings_segments(rings: list) -> np.ndarray:
+    """(Σ n_i, 4) rows x0, y0, x1, y1 of every closed ring's edges, ring by ring: edge j of a ring joins its vertex j
+    to vertex j+1, the last one back to vertex 0."""
+    verts = np.concatenate([np.asarray(r, float) for r in rings])
+    sizes = np.array([len(r) for r in rings])
+    ends = np.cumsum(sizes)
+    following = np.arange(1, len(verts) + 1)
+    following[ends - 1] = ends - sizes  # each ring's last vertex closes to its first
+    return np.concatenate([verts, verts[following]], axis=1)
 
 
 def pack_scenes(scenes: list[Scene] | tuple[Scene, ...]) -> SceneArrays:
@@ -103,9 +109,7 @@ def pack_scenes(scenes: list[Scene] | tuple[Scene, ...]) -> SceneArrays:
         for j, c in enumerate(circles[k]):
             circle[k, j] = (c.center[0], c.center[1], c.radius)
         n_circle[k] = len(circles[k])
-        rows = [_closed_ring_segments(np.asarray(v, float)) for v in ray_polys[k]]
-        rows.append(_closed_ring_segments(b))
-        all_rows = np.concatenate(rows, axis=0)
+        all_rows = _rings_segments([*ray_polys[k], b])
         segs[k, : len(all_rows)] = all_rows
         n_segs[k] = len(all_rows)
         targets[k] = np.asarray(scene.target, float)

@@ -24,7 +24,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import Point, Polygon
 
-from np_sim.kernels.collision import footprint_valid, point_valid, pose_valid, poses_valid, rect_inside_boundary
+from np_sim.kernels.collision import (CHUNK_POSES, footprint_valid, point_valid, pose_valid, poses_valid,
+                                      rect_inside_boundary)
 from np_sim.kernels import swept
 from np_sim.kernels.geometry import footprint_corners
 from np_sim.scene import PolygonObstacle, Scene
@@ -210,6 +211,29 @@ def test_poses_valid_is_all_of_the_rows(packed):
     assert outcomes == {(False, True), (False, False), (True, True), (True, False)}
     assert poses_valid(geo, 0, np.empty((0, 3)), True, LOCAL)  # an empty path is valid
 
+
+
+def test_chunked_footprint_paths_match_the_per_pose_rule(packed):
+    """``poses_valid`` checks footprint paths in chunks of nearby poses, skipping the edges and obstacles far from a
+    chunk: its verdict must equal the per-pose rule (``footprint_valid``, itself checked against shapely above) on
+    paths that start anywhere (inside, outside, across the boundary and the obstacles) and run for several chunks,
+    and on every one-pose path of them."""
+    scenes, arrays = packed
+    geo = arrays.geometry
+    rng = np.random.default_rng(11)
+    corners = np.empty((4, 2))
+    outcomes = set()
+    for k, scene in enumerate(scenes):
+        starts = query_poses(rng, scene, 40)
+        for start in starts[rng.permutation(len(starts))[:60]]:
+            n = int(rng.integers(1, 81))
+            steps = rng.normal(0.0, float(rng.choice([0.05, 0.3, 1.5])), (n, 3)) * [1.0, 1.0, 0.2]
+            poses = np.ascontiguousarray(start + np.cumsum(steps, axis=0) - steps[0])
+            per_pose = [bool(footprint_valid(geo, k, x, y, th, LOCAL, corners)) for x, y, th in poses]
+            assert bool(poses_valid(geo, k, poses, True, LOCAL)) == all(per_pose), (k, poses.tolist())
+            assert [bool(poses_valid(geo, k, poses[i:i + 1], True, LOCAL)) for i in range(n)] == per_pose
+            outcomes.add((n > CHUNK_POSES, all(per_pose)))
+    assert outcomes == {(False, True), (False, False), (True, True), (True, False)}
 
 def _exact_scene(extra_obstacles, boundary=None) -> Scene:
     return Scene.from_dict(
