@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from np_sim.kernels.kinematics import sample_arcs
 from np_sim.metrics import plan_metrics
@@ -87,9 +88,8 @@ class Plan:
         # (on a 40 m segment 0.4 m apart: 5x the true curvature), so the curve is rebuilt and differentiated.
         c = hermite_coefficients(self.hermite.points)
         gear = 1.0 if self.hermite.forward else -1.0
-        t_fine = np.linspace(0.0, 1.0, 4 * max(len(self.hermite.points) - 1, 1) + 1)[:, None]
-        speed = np.hypot(*(c[1] + t_fine * (2.0 * c[2] + 3.0 * t_fine * c[3])).T)  # |dr/dt|
-        t_fine = t_fine[:, 0]
+        t_fine = np.linspace(0.0, 1.0, 4 * max(len(self.hermite.points) - 1, 1) + 1)
+        speed = np.hypot(*_cubic_derivatives(c, t_fine)[1].T)  # |dr/dt|
         cum = np.concatenate([[0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * np.diff(t_fine))])
         if not cum[-1] > 0:
             return np.array([[*last, 0.0, gear, s0]] * 2)
@@ -133,10 +133,19 @@ def _monomial_fit(n: int) -> tuple[np.ndarray, np.ndarray]:
     return basis, np.linalg.pinv(basis)
 
 
+@njit(cache=True, error_model="numpy")
 def _cubic_derivatives(c: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(len(t), 2) values, first and second t-derivatives of the cubic with monomial coefficients ``c`` (4, 2)."""
-    t = t[:, None]
-    value = c[0] + t * (c[1] + t * (c[2] + t * c[3]))
-    first = c[1] + t * (2.0 * c[2] + 3.0 * t * c[3])
-    second = 2.0 * c[2] + 6.0 * t * c[3]
+    """(len(t), 2) values, first and second t-derivatives of the cubic with monomial coefficients ``c`` (4, 2) (paper
+    eq:hermite), compiled: each element is the same sequence of products and sums as the array expressions
+    c0 + t(c1 + t(c2 + t c3)), c1 + t(2 c2 + 3t c3) and 2 c2 + 6t c3, so the values are theirs bit for bit, without
+    a temporary array per operation."""
+    value = np.empty((t.shape[0], 2))
+    first = np.empty((t.shape[0], 2))
+    second = np.empty((t.shape[0], 2))
+    for i in range(t.shape[0]):
+        ti = t[i]
+        for j in range(2):
+            value[i, j] = c[0, j] + ti * (c[1, j] + ti * (c[2, j] + ti * c[3, j]))
+            first[i, j] = c[1, j] + ti * (2.0 * c[2, j] + 3.0 * ti * c[3, j])
+            second[i, j] = 2.0 * c[2, j] + 6.0 * ti * c[3, j]
     return value, first, second
