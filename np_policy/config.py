@@ -629,8 +629,8 @@ clearance asked of a call's plans capped at its start pose's and its target pose
 clips (docs/best_of_n.md, 2026-12-06): footprint success 174 against the anytime preset's 170, calls answered by the
 rescue rounds 168 → 50 with the start cap alone; with the target cap too, 175 and 11 rescue calls (the search's
 failures, each spending its whole node budget, 38 → 6 on the first 94). Its plain mean rollout keeps the 50-arc budget
-(``mean_capped``): on the same clips the same 175 parked, clip for clip, and a third of the searched calls no longer
-first play a 200-arc wandering mean rollout (about 25 ms each; docs/best_of_n.md, 2026-12-06 evening)."""
+(``mean_capped``): on the same clips the same 175 parked, clip for clip, and 44 of the 157 calls past the mean stage no
+longer first play a 200-arc wandering mean rollout (about 25 ms each; docs/best_of_n.md, 2026-12-06 evening)."""
 
 PRESETS: dict[str, NeuralParkerConfig] = {"paper": PAPER, "footprint_best_of_n": FOOTPRINT_BEST_OF_N,
                                           "footprint_anytime": FOOTPRINT_ANYTIME,

@@ -6,7 +6,8 @@ Measures, in one run on the hand-made example scenes with the paper's full confi
 * single-env and 128-env vector-env steps per second (resets included);
 * the plain reference step (Python loops + shapely, ``tests/reference_step.py``, the way a per-step research env
   such as HOPE's works) and the vector env's speed-up over it;
-* microbenchmarks: one 30-sample arc check, one 120-beam cast, one ensemble connection (gate open).
+* microbenchmarks: one 30-sample arc check, one 120-beam cast, one ensemble connection (gate open), and the
+  footprint check of a sampled path per pose (`np_sim.collision.path_valid`, the planners' plan checks).
 
 Targets on the 2-core development machine are printed beside each figure.
 """
@@ -30,7 +31,7 @@ from np_sim.env import ParkingEnv, ParkingVectorEnv
 from np_sim.examples import example_scenes
 from np_sim.frames import pose_to_target_frame
 from np_sim.hermite import _candidate_sets
-from np_sim.kernels.collision import arc_valid
+from np_sim.kernels.collision import arc_valid, footprint_valid, poses_valid
 from np_sim.kernels.geometry import cast_beams
 from np_sim.kernels.hermite import select_candidate
 from np_sim.scene_arrays import pack_scenes
@@ -41,6 +42,7 @@ TARGETS = {
     "speedup_vs_plain_step": (">=", 100.0, ""),
     "ensemble_connect_us": ("<=", 100.0, "median"),
     "cast_120_us": ("<=", 20.0, ""),
+    "footprint_path_ns_per_pose": ("<=", 200.0, "(553 before the inlined, chunked check)"),
 }
 
 
@@ -135,6 +137,23 @@ def _arc_checks(geo, ks, starts, arcs, n_samples, local) -> int:
     return n_valid
 
 
+def _valid_paths(geo, poses, local, rng, length: int = 400) -> list:
+    """(scene, path) pairs: from each start a smooth random path of poses 5 cm apart, cut before its first pose in
+    collision (the footprint convention), so that every path checked is valid to its end."""
+    corners = np.empty((4, 2))
+    paths = []
+    for k, start in poses:
+        turn = np.cumsum(rng.normal(0.0, 0.02, length))
+        heading = start[2] + turn
+        xy = start[:2] + np.cumsum(0.05 * np.stack([np.cos(heading), np.sin(heading)], axis=1), axis=0)
+        path = np.ascontiguousarray(np.column_stack([xy, heading]))
+        free = [footprint_valid(geo, k, *pose, local, corners) for pose in path]
+        end = free.index(False) if False in free else length
+        if end:
+            paths.append((int(k), np.ascontiguousarray(path[:end])))
+    return paths
+
+
 def bench_kernels(scenes, config, seed: int) -> dict[str, float]:
     arrays = pack_scenes(scenes)
     geo = arrays.geometry
@@ -182,11 +201,18 @@ def bench_kernels(scenes, config, seed: int) -> dict[str, float]:
                          cands.scales0, cands.scales1, cands.dbasis, cands.pts, cands.kbar_max, cands.costs, n, True,
                          config.connector.kappa_max, False, local)
         times.append(time.perf_counter() - t0)
+    paths = _valid_paths(geo, poses, local, rng)
+
+    def path_check():
+        return sum(len(path) for k, path in paths if poses_valid(geo, k, path, True, local))
+
     arc_check()
     cast()
     u_arc, t_arc = _timed(arc_check, 0.5)
     u_cast, t_cast = _timed(cast, 0.5)
+    u_path, t_path = _timed(path_check, 0.5)
     return {
+        "footprint_path_ns_per_pose": 1e9 * t_path / u_path,
         "arc_check_us": 1e6 * t_arc / u_arc,
         "cast_120_us": 1e6 * t_cast / u_cast,
         "ensemble_connect_us": 1e6 * float(np.median(times[64:])),
