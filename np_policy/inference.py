@@ -30,6 +30,7 @@ from numba.typed import List
 from torch import nn
 
 import np_sim.kernels  # noqa: F401  (sets numba's cache directory)
+from np_sim.env_core import action_space_error
 from np_sim.kernels import step as K
 from np_policy.network import ActorCritic, SelfAttentionBlock
 
@@ -264,6 +265,5 @@ class CompiledActor:
                           core.dbasis, core.h_pts, core.h_kbar_max, core.h_dk, core.h_len, core.h_cost, core.obs,
                           core.R, self.mats, self.vecs, self.sections, self.shape, self.eps, actions)
         if n < 0:
-            raise ValueError(f"step: action[0] = {actions[-n - 1].tolist()} lies outside the action space [-1, 1]^2 "
-                             "(the env never clips; clip or squash in the policy)")
+            raise action_space_error(0, actions[-n - 1])
         return actions[:n]

@@ -72,11 +72,14 @@ def checked_actions(actions, num_envs: int) -> np.ndarray:
         raise ValueError(f"step: expected actions of shape ({num_envs}, 2), got {a.shape}")
     if not np.all(np.isfinite(a)) or np.any(np.abs(a) > 1.0):
         bad = np.argwhere(~np.isfinite(a) | (np.abs(a) > 1.0))[0]
-        raise ValueError(
-            f"step: action[{bad[0]}] = {a[bad[0]].tolist()} lies outside the action space [-1, 1]^2 "
-            "(the env never clips; clip or squash in the policy)"
-        )
+        raise action_space_error(int(bad[0]), a[bad[0]])
     return a
+
+
+def action_space_error(row: int, action: np.ndarray) -> ValueError:
+    """The error of a step given ``action`` (row ``row``) outside the action space [-1, 1]^2 or not finite."""
+    return ValueError(f"step: action[{row}] = {np.asarray(action).tolist()} lies outside the action space "
+                      "[-1, 1]^2 (the env never clips; clip or squash in the policy)")
 
 
 def checked_rows(rows, num_envs: int) -> np.ndarray:

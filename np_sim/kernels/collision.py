@@ -51,6 +51,15 @@ def point_clear_of_obstacles(geo, k: int, px: float, py: float) -> bool:
     return True
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _corner_box(corners: np.ndarray) -> tuple[float, float, float, float]:
+    """(xmin, xmax, ymin, ymax) of the rectangle's four corners ``corners`` (4, 2)."""
+    return (min(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0]),
+            max(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0]),
+            min(corners[0, 1], corners[1, 1], corners[2, 1], corners[3, 1]),
+            max(corners[0, 1], corners[1, 1], corners[2, 1], corners[3, 1]))
+
+
 @njit(cache=True, error_model="numpy")
 def rect_inside_boundary(corners: np.ndarray, verts: np.ndarray, n: int) -> bool:
     """The closed rectangle ``corners`` (4, 2) lies strictly inside the simple polygon ``verts[:n]``: every corner
@@ -59,10 +68,7 @@ def rect_inside_boundary(corners: np.ndarray, verts: np.ndarray, n: int) -> bool
     When no polygon edge's bounding box meets the rectangle's (closed boxes), no polygon edge can touch the
     rectangle, so the rectangle (connected) lies wholly inside or wholly outside and its first corner's
     point-in-polygon test decides (exact); otherwise every corner and every pair of edges is tested."""
-    xmin = min(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0])
-    xmax = max(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0])
-    ymin = min(corners[0, 1], corners[1, 1], corners[2, 1], corners[3, 1])
-    ymax = max(corners[0, 1], corners[1, 1], corners[2, 1], corners[3, 1])
+    xmin, xmax, ymin, ymax = _corner_box(corners)
     near = False
     j = n - 1
     for i in range(n):
@@ -86,10 +92,7 @@ def footprint_valid(geo, k: int, x: float, y: float, th: float, local: np.ndarra
     footprint_corners(x, y, th, local, corners)
     if not rect_inside_boundary(corners, boundary[k], n_boundary[k]):
         return False
-    xmin = min(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0])
-    xmax = max(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0])
-    ymin = min(corners[0, 1], corners[1, 1], corners[2, 1], corners[3, 1])
-    ymax = max(corners[0, 1], corners[1, 1], corners[2, 1], corners[3, 1])
+    xmin, xmax, ymin, ymax = _corner_box(corners)
     for j in range(n_poly[k]):
         if xmax < aabb[k, j, 0] or xmin > aabb[k, j, 2] or ymax < aabb[k, j, 1] or ymin > aabb[k, j, 3]:
             continue
@@ -202,10 +205,7 @@ def _near_edges(verts, n, box, slack, out):
 def _rect_inside_near(corners, verts, n, edges, n_edges, sub):
     """``rect_inside_boundary`` of the rectangle against the ring ``verts[:n]``, given the ring's edges ``edges`` that
     can meet the rectangle's box (the others cannot touch it); ``sub`` is scratch for one edge at a time."""
-    xmin = min(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0])
-    xmax = max(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0])
-    ymin = min(corners[0, 1], corners[1, 1], corners[2, 1], corners[3, 1])
-    ymax = max(corners[0, 1], corners[1, 1], corners[2, 1], corners[3, 1])
+    xmin, xmax, ymin, ymax = _corner_box(corners)
     near = False
     for e in range(n_edges):
         j = edges[e]
@@ -242,10 +242,7 @@ def _rect_touches_segment(corners, seg):
 @njit(cache=True, error_model="numpy")
 def _rect_clear(corners, polys, poly_nv, boxes, near, n_near):
     """The rectangle shares no point with the polygons ``near[:n_near]`` (``footprint_valid``'s obstacle test)."""
-    xmin = min(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0])
-    xmax = max(corners[0, 0], corners[1, 0], corners[2, 0], corners[3, 0])
-    ymin = min(corners[0, 1], corners[1, 1], corners[2, 1], corners[3, 1])
-    ymax = max(corners[0, 1], corners[1, 1], corners[2, 1], corners[3, 1])
+    xmin, xmax, ymin, ymax = _corner_box(corners)
     for e in range(n_near):
         j = near[e]
         if xmax < boxes[j, 0] or xmin > boxes[j, 2] or ymax < boxes[j, 1] or ymin > boxes[j, 3]:
