@@ -13,6 +13,10 @@ per layer and row (``python -m np_policy.bench_actor``). The actions agree to fl
 a batch of one (the paper's planner, the mean rollout) always takes the compiled kernel, and a whole mean rollout of
 one env runs as one compiled loop of the actor and the env's step (``CompiledActor.mean_rollout``): the per-arc
 Python round trip (array checks, two kernel dispatches) cost about as much as the network and the step themselves.
+That loop computes the geometry token (the obstacle and boundary slot streams and their attention block, about
+half the network's products) once: the slots are the scene's, constant in the target frame
+(`np_sim.observation`), so every arc's token is the first arc's, bit for bit; only the ego (and LiDAR) streams,
+the fusion and the actor run per arc.
 
 Layout: the weights are flattened into two typed lists, matrices (in × out, so ``x @ W``) and vectors (biases,
 LayerNorm gains and offsets), in exactly the order ``_mean_action`` consumes them; ``_export`` is the one place
@@ -87,19 +91,22 @@ def _attention_block(x, heads, mats, vecs, cursor, eps):
 
 
 @njit(cache=True, error_model="numpy")
-def _mean_action(obs, mats, vecs, sections, shape, eps):
-    """Deterministic action of one flat observation, clipped to [−1, 1] (``ActorCritic.mean_action``).
-
-    ``sections`` (4, 2): (start, stop) of ego, lidar, obstacles, boundary, stop = start when absent;
-    ``shape``: obstacle vertex-pair width, geometry heads, fusion heads, fusion depth, actor layers.
-    """
-    cursor = np.zeros(2, np.int64)
+def _stream_tokens(obs, mats, vecs, sections, cursor):
+    """The ego token and, when present, the LiDAR token of one flat observation (the per-pose streams)."""
     tokens = List()
     hidden = _dense(obs[sections[0, 0]:sections[0, 1]].reshape(1, -1), mats, vecs, cursor, True)
     tokens.append(_dense(hidden, mats, vecs, cursor, False))
     if sections[1, 1] > sections[1, 0]:
         hidden = _dense(obs[sections[1, 0]:sections[1, 1]].reshape(1, -1), mats, vecs, cursor, True)
         tokens.append(_dense(hidden, mats, vecs, cursor, False))
+    return tokens
+
+
+@njit(cache=True, error_model="numpy")
+def _geometry_token(obs, mats, vecs, sections, shape, eps, cursor, tokens) -> None:
+    """The geometry token of one flat observation (obstacle and boundary slot streams, learned slot positions, the
+    geometry-token attention block and its mean summary), appended to ``tokens``; nothing without geometry slots.
+    It reads only the scene-constant slots (`np_sim.observation`), so one rollout's arcs share it."""
     slots = List()
     if sections[2, 1] > sections[2, 0]:
         width = shape[0]
@@ -108,22 +115,28 @@ def _mean_action(obs, mats, vecs, sections, shape, eps):
     if sections[3, 1] > sections[3, 0]:
         rows = np.ascontiguousarray(obs[sections[3, 0]:sections[3, 1]]).reshape(-1, 4)
         slots.append(_dense(_dense(rows, mats, vecs, cursor, True), mats, vecs, cursor, False))
-    if len(slots) > 0:
-        n = 0
-        for part in slots:
-            n += part.shape[0]
-        geometry = np.empty((n, slots[0].shape[1]), np.float32)
-        row = 0
-        for part in slots:
-            geometry[row:row + part.shape[0]] = part
-            row += part.shape[0]
-        geometry += mats[cursor[0]]  # learned slot positions
-        cursor[0] += 1
-        geometry = _attention_block(geometry, shape[1], mats, vecs, cursor, eps)
-        summary = np.empty((1, geometry.shape[1]), np.float32)
-        for c in range(geometry.shape[1]):
-            summary[0, c] = geometry[:, c].mean()
-        tokens.append(_dense(summary, mats, vecs, cursor, False))
+    if len(slots) == 0:
+        return
+    n = 0
+    for part in slots:
+        n += part.shape[0]
+    geometry = np.empty((n, slots[0].shape[1]), np.float32)
+    row = 0
+    for part in slots:
+        geometry[row:row + part.shape[0]] = part
+        row += part.shape[0]
+    geometry += mats[cursor[0]]  # learned slot positions
+    cursor[0] += 1
+    geometry = _attention_block(geometry, shape[1], mats, vecs, cursor, eps)
+    summary = np.empty((1, geometry.shape[1]), np.float32)
+    for c in range(geometry.shape[1]):
+        summary[0, c] = geometry[:, c].mean()
+    tokens.append(_dense(summary, mats, vecs, cursor, False))
+
+
+@njit(cache=True, error_model="numpy")
+def _fused_action(tokens, mats, vecs, shape, eps, cursor):
+    """The fusion block(s), projection and actor MLP on the stream tokens, clipped to [−1, 1]."""
     d = tokens[0].shape[1]
     fused = np.empty((len(tokens), d), np.float32)
     for i in range(len(tokens)):
@@ -134,6 +147,19 @@ def _mean_action(obs, mats, vecs, sections, shape, eps):
     for layer in range(shape[4]):
         feature = _dense(feature, mats, vecs, cursor, layer < shape[4] - 1)
     return np.minimum(np.maximum(feature[0], np.float32(-1.0)), np.float32(1.0))
+
+
+@njit(cache=True, error_model="numpy")
+def _mean_action(obs, mats, vecs, sections, shape, eps):
+    """Deterministic action of one flat observation, clipped to [−1, 1] (``ActorCritic.mean_action``).
+
+    ``sections`` (4, 2): (start, stop) of ego, lidar, obstacles, boundary, stop = start when absent;
+    ``shape``: obstacle vertex-pair width, geometry heads, fusion heads, fusion depth, actor layers.
+    """
+    cursor = np.zeros(2, np.int64)
+    tokens = _stream_tokens(obs, mats, vecs, sections, cursor)
+    _geometry_token(obs, mats, vecs, sections, shape, eps, cursor, tokens)
+    return _fused_action(tokens, mats, vecs, shape, eps, cursor)
 
 
 @njit(cache=True, error_model="numpy")
@@ -152,8 +178,20 @@ def _mean_rollout(geo, targets, static_obs, S, P, local, b_ranges, off_c, off_s,
     it terminates or reaches its arc budget; each normalised action into a row of ``actions``. Returns the number of
     arcs, or −(that number) when the last action was not finite (its step not taken)."""
     n = 0
+    has_geometry = sections[2, 1] > sections[2, 0] or sections[3, 1] > sections[3, 0]
+    cursor = np.zeros(2, np.int64)
+    tokens = _stream_tokens(obs[0], mats, vecs, sections, cursor)
+    _geometry_token(obs[0], mats, vecs, sections, shape, eps, cursor, tokens)
+    geometry = tokens[len(tokens) - 1]
+    after_geometry = cursor.copy()
     while True:
-        action = _mean_action(obs[0], mats, vecs, sections, shape, eps)
+        if n > 0:  # the per-pose streams anew, the scene-constant geometry token of the first arc (module docstring)
+            cursor[:] = 0
+            tokens = _stream_tokens(obs[0], mats, vecs, sections, cursor)
+            if has_geometry:
+                tokens.append(geometry)
+            cursor[:] = after_geometry
+        action = _fused_action(tokens, mats, vecs, shape, eps, cursor)
         a0 = np.float64(action[0])
         a1 = np.float64(action[1])
         actions[n, 0] = a0

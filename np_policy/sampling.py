@@ -19,6 +19,7 @@ parking tolerance. The weights were set on difficult training clips, never on th
 
 from __future__ import annotations
 
+import functools
 import math
 import weakref
 from collections.abc import Sequence
@@ -162,8 +163,13 @@ def clearance_covers_sweep(vehicle: VehicleSpec, margin_m: float, ds_m: float, k
     rule). Between two samples every body point travels at most ds·(1 + κ·r), r the farthest body point from the
     reference point, so the body at any pose between them lies within half of that of the body at the nearer sample,
     inside the grown rectangle (which contains the body's Minkowski sum with a disc of the margin)."""
-    r_max = float(np.max(np.hypot(*vehicle.footprint_local().T)))
-    return margin_m >= 0.5 * ds_m * (1.0 + kappa_limit * r_max)
+    return margin_m >= 0.5 * ds_m * (1.0 + kappa_limit * _body_reach(vehicle))
+
+
+@functools.lru_cache(maxsize=16)
+def _body_reach(vehicle: VehicleSpec) -> float:
+    """The farthest footprint corner's distance from the reference point (m)."""
+    return float(np.max(np.hypot(*vehicle.footprint_local().T)))
 
 
 @dataclass(frozen=True)
