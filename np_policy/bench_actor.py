@@ -1,7 +1,7 @@
 """Time the actor on batches: ``CompiledActor.batch`` against the two ways it chooses between.
 
 ``python -m np_policy.bench_actor [--checkpoint checkpoints/site_np_footprint.pt] [--batches 1 8 32 128]
-[--repeats 20] [--json]``
+[--repeats 20] [--rollout-clips 40] [--json]``
 
 For each batch size B this prints the rows per second of ``CompiledActor.batch`` beside its two paths: the
 compiled kernel over the batch (``_mean_actions``: the single-observation network per row, how every batch ran
@@ -9,7 +9,14 @@ before ``TORCH_BATCH``) and the torch model's ``mean_action`` on the whole batch
 worker. ``batch`` should match the faster of the two at every size. The footprint planner's sampled round starts
 as a batch of 32 rollouts and its rescue rounds as 128, shrinking as rollouts end. Observations are synthetic flat
 vectors of the checkpoint's layout (`np_policy.bench_update.synthetic_obs`); the time does not depend on their
-values. Run it on an otherwise idle machine.
+values.
+
+Then the mean rollout of one env (``CompiledActor.mean_rollout``, the paper's planner and the footprint planners'
+first stage) from the first frames of the first ``--rollout-clips`` difficult training clips: arcs per second of
+the whole loop (network and env step) beside the network alone evaluated whole once per arc (``_mean_action``),
+the figure to beat, since a rollout that evaluated the whole network at every arc could not be faster than that.
+The loop computes the scene-constant geometry token once per rollout (`np_policy.inference`). Run it on an otherwise
+idle machine.
 """
 
 from __future__ import annotations
@@ -18,11 +25,12 @@ import argparse
 import json
 from pathlib import Path
 
+import numpy as np
 import torch
 
 from np_policy.bench_update import _seconds, synthetic_obs
-from np_policy.inference import TORCH_BATCH, CompiledActor, _mean_actions
-from np_policy.planner import Policy
+from np_policy.inference import TORCH_BATCH, CompiledActor, _mean_action, _mean_actions
+from np_policy.planner import NeuralParkerPlanner, Policy
 from np_sim.cli import cli_boundary, positive_int
 
 
@@ -51,6 +59,38 @@ def measure(checkpoint: str | Path, batches=(1, 8, 32, 128), repeats: int = 20) 
     return rows
 
 
+def measure_rollout(checkpoint: str | Path, clips: int = 40, repeats: int = 5) -> dict:
+    """Arcs per second of the compiled mean rollout and of the whole network per arc (module docstring), over the
+    first frames of the first ``clips`` difficult training clips whose scene the compiled loop plays."""
+    from np_sim.clips import difficult_clips
+
+    torch.set_num_threads(1)
+    planner = NeuralParkerPlanner.from_checkpoint(checkpoint)
+    rollouts, actor = planner.mean, planner.actor
+    cases = [(c.frame_scene(0, pose=c.start), np.asarray(c.start, float)) for c in difficult_clips("train")[:clips]]
+    cases = [(scene, start) for scene, start in cases if actor.plays_rollout(rollouts._core(scene))]
+    if not cases:
+        raise ValueError(f"bench_actor: none of the first {clips} training clips is played by the compiled rollout")
+    rng = np.random.default_rng(0)
+    arcs, loop_s, network_s = 0, 0.0, 0.0
+    for scene, start in cases:
+        core = rollouts._core(scene)
+
+        def rollout():
+            core.reset_envs(np.arange(1), rng, 0, start)
+            return actor.mean_rollout(core)
+
+        n = len(rollout())
+        core.reset_envs(np.arange(1), rng, 0, start)
+        obs = core.obs[0].copy()
+        arcs += n
+        loop_s += min(_seconds(rollout) for _ in range(repeats))
+        network_s += n * _best_seconds(lambda: _mean_action(obs, actor.mats, actor.vecs, actor.sections, actor.shape,
+                                                            actor.eps), repeats)
+    return {"scenes": len(cases), "arcs": arcs, "rollout_arcs_per_s": arcs / loop_s,
+            "network_alone_arcs_per_s": arcs / network_s}
+
+
 @cli_boundary
 def main(argv=None) -> list[dict]:
     """Command-line entry point (usage in the module docstring); returns the figures of `measure`."""
@@ -59,11 +99,14 @@ def main(argv=None) -> list[dict]:
     parser.add_argument("--checkpoint", type=Path, default=Path("checkpoints/site_np_footprint.pt"))
     parser.add_argument("--batches", type=positive_int, nargs="+", default=[1, 8, 32, 128])
     parser.add_argument("--repeats", type=positive_int, default=20, help="timed calls per figure (best kept)")
+    parser.add_argument("--rollout-clips", type=positive_int, default=40,
+                        help="difficult training clips whose first frame the mean-rollout figure plays")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     args = parser.parse_args(argv)
     rows = measure(args.checkpoint, tuple(args.batches), args.repeats)
+    rollout = measure_rollout(args.checkpoint, args.rollout_clips, min(args.repeats, 5))
     if args.json:
-        print(json.dumps(rows))
+        print(json.dumps({"batches": rows, "mean_rollout": rollout}))
         return rows
     print(f"actor of {args.checkpoint}, rows per second (best of {args.repeats}); batches of {TORCH_BATCH} or "
           f"more go to torch:")
@@ -72,6 +115,9 @@ def main(argv=None) -> list[dict]:
     for r in rows:
         print(f"{r['batch']:>6} {r['batch_rows_per_s']:>20,.0f} {r['compiled_kernel_rows_per_s']:>16,.0f} "
               f"{r['torch_rows_per_s']:>16,.0f} {r['speedup_vs_compiled_kernel']:>16.2f}x")
+    print(f"mean rollout on {rollout['scenes']} training-clip first frames ({rollout['arcs']} arcs): "
+          f"{rollout['rollout_arcs_per_s']:,.0f} arcs/s with the env's step, against "
+          f"{rollout['network_alone_arcs_per_s']:,.0f} arcs/s for the whole network alone per arc (to beat)")
     return rows
 
 
