@@ -339,9 +339,12 @@ def drive(planners: dict[str, Any], config: ClosedLoopConfig, clips: list, indic
     bar = tqdm(total=len(jobs) * len(names), desc="clips × planners in MuJoCo", unit="run", disable=not progress)
     results: list[list[dict]] = []
     if config.workers == 1:
-        for k, *settings in jobs:
-            results.append(clip_rows(clips[k], planners, *settings))
-            bar.update(len(names))
+        from np_policy.threads import threads
+
+        with threads(1):  # as in a pool worker (`_init_worker`): plan times do not depend on the worker count
+            for k, *settings in jobs:
+                results.append(clip_rows(clips[k], planners, *settings))
+                bar.update(len(names))
     else:
         # spawn, not fork: the parent has torch's thread pool up (build_planners), and a forked child can deadlock
         # on its locks (it did: two workers hung idle)

@@ -177,10 +177,13 @@ def run_jobs(jobs: list[tuple], names: list[str], spec, seed: int, log: RecordLo
     an address, else on Ray actors (module docstring)."""
     bar = tqdm(total=sum(len(j[3]) for j in jobs), desc="robustness runs", unit="run")
     if workers == 1 and address is None:
+        from np_policy.threads import threads
+
         worker = StudyWorker(names, spec, seed, quiet=False)
-        for job in jobs:
-            log.append(worker.run(job))
-            bar.update(len(job[3]))
+        with threads(1):  # as on a pool worker (`_quiet_threads`), the caller's counts restored after
+            for job in jobs:
+                log.append(worker.run(job))
+                bar.update(len(job[3]))
         bar.close()
         return
     import ray

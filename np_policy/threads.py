@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+
 import numba
 import torch
 
@@ -15,6 +18,19 @@ def use_threads(n: int) -> None:
     if n:
         numba.set_num_threads(min(n, numba.config.NUMBA_NUM_THREADS))
         torch.set_num_threads(n)
+
+
+@contextmanager
+def threads(n: int) -> Iterator[None]:
+    """``use_threads(n)`` inside the block, the process's previous torch and numba counts restored after it (a run in
+    the caller's process plays as a pool worker does, and leaves the caller as it was)."""
+    before = torch.get_num_threads(), numba.get_num_threads()
+    use_threads(n)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before[0])
+        numba.set_num_threads(before[1])
 
 
 def thread_counts() -> dict[str, int]:
