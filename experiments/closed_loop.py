@@ -341,7 +341,7 @@ def drive(planners: dict[str, Any], config: ClosedLoopConfig, clips: list, indic
     if config.workers == 1:
         from np_policy.threads import threads
 
-        with threads(1):  # as in a pool worker (`_init_worker`): plan times do not depend on the worker count
+        with threads(1):  # torch and numba on one thread as in a pool worker: plan times do not depend on the count
             for k, *settings in jobs:
                 results.append(clip_rows(clips[k], planners, *settings))
                 bar.update(len(names))

@@ -180,7 +180,7 @@ def run_jobs(jobs: list[tuple], names: list[str], spec, seed: int, log: RecordLo
         from np_policy.threads import threads
 
         worker = StudyWorker(names, spec, seed, quiet=False)
-        with threads(1):  # as on a pool worker (`_quiet_threads`), the caller's counts restored after
+        with threads(1):  # torch and numba on one thread as on a pool worker, the caller's counts restored after
             for job in jobs:
                 log.append(worker.run(job))
                 bar.update(len(job[3]))

@@ -103,10 +103,10 @@ def _stream_tokens(obs, mats, vecs, sections, cursor):
 
 
 @njit(cache=True, error_model="numpy")
-def _geometry_token(obs, mats, vecs, sections, shape, eps, cursor, tokens) -> None:
-    """The geometry token of one flat observation (obstacle and boundary slot streams, learned slot positions, the
-    geometry-token attention block and its mean summary), appended to ``tokens``; nothing without geometry slots.
-    It reads only the scene-constant slots (`np_sim.observation`), so one rollout's arcs share it."""
+def _geometry_token(obs, mats, vecs, sections, shape, eps, cursor):
+    """The (1, d) geometry token of one flat observation (paper §III-C: obstacle and boundary slot streams, learned
+    slot positions, the geometry-token attention block and its mean summary); (0, 0) without geometry slots. It
+    reads only the scene-constant slots (`np_sim.observation`), so one rollout's arcs share it."""
     slots = List()
     if sections[2, 1] > sections[2, 0]:
         width = shape[0]
@@ -116,7 +116,7 @@ def _geometry_token(obs, mats, vecs, sections, shape, eps, cursor, tokens) -> No
         rows = np.ascontiguousarray(obs[sections[3, 0]:sections[3, 1]]).reshape(-1, 4)
         slots.append(_dense(_dense(rows, mats, vecs, cursor, True), mats, vecs, cursor, False))
     if len(slots) == 0:
-        return
+        return np.empty((0, 0), np.float32)
     n = 0
     for part in slots:
         n += part.shape[0]
@@ -131,7 +131,7 @@ def _geometry_token(obs, mats, vecs, sections, shape, eps, cursor, tokens) -> No
     summary = np.empty((1, geometry.shape[1]), np.float32)
     for c in range(geometry.shape[1]):
         summary[0, c] = geometry[:, c].mean()
-    tokens.append(_dense(summary, mats, vecs, cursor, False))
+    return _dense(summary, mats, vecs, cursor, False)
 
 
 @njit(cache=True, error_model="numpy")
@@ -158,7 +158,9 @@ def _mean_action(obs, mats, vecs, sections, shape, eps):
     """
     cursor = np.zeros(2, np.int64)
     tokens = _stream_tokens(obs, mats, vecs, sections, cursor)
-    _geometry_token(obs, mats, vecs, sections, shape, eps, cursor, tokens)
+    geometry = _geometry_token(obs, mats, vecs, sections, shape, eps, cursor)
+    if geometry.shape[0] > 0:
+        tokens.append(geometry)
     return _fused_action(tokens, mats, vecs, shape, eps, cursor)
 
 
@@ -174,23 +176,21 @@ def _mean_actions(obs, mats, vecs, sections, shape, eps):
 @njit(cache=True, error_model="numpy")
 def _mean_rollout(geo, targets, static_obs, S, P, local, b_ranges, off_c, off_s, offsets, headings, scales0, scales1,
                   basis, dbasis, pts, kbar_max, dk, lengths, costs, obs, R, mats, vecs, sections, shape, eps, actions):
-    """Env 0 of a batched env core stepped by its mean action (``_mean_action``, then the env's ``step_one``) until
-    it terminates or reaches its arc budget; each normalised action into a row of ``actions``. Returns the number of
-    arcs, or −(that number) when the last action was not finite (its step not taken)."""
-    n = 0
-    has_geometry = sections[2, 1] > sections[2, 0] or sections[3, 1] > sections[3, 0]
+    """Env 0 of a batched env core stepped by its mean action (``_mean_action``'s network, its geometry token
+    computed once: module docstring; then the env's ``step_one``) until it terminates or reaches its arc budget; each
+    normalised action into a row of ``actions``. Returns the number of arcs, or −(that number) when the last action
+    was not finite (its step not taken)."""
     cursor = np.zeros(2, np.int64)
-    tokens = _stream_tokens(obs[0], mats, vecs, sections, cursor)
-    _geometry_token(obs[0], mats, vecs, sections, shape, eps, cursor, tokens)
-    geometry = tokens[len(tokens) - 1]
+    _stream_tokens(obs[0], mats, vecs, sections, cursor)  # only to move the cursor past the streams' weights
+    geometry = _geometry_token(obs[0], mats, vecs, sections, shape, eps, cursor)
     after_geometry = cursor.copy()
+    n = 0
     while True:
-        if n > 0:  # the per-pose streams anew, the scene-constant geometry token of the first arc (module docstring)
-            cursor[:] = 0
-            tokens = _stream_tokens(obs[0], mats, vecs, sections, cursor)
-            if has_geometry:
-                tokens.append(geometry)
-            cursor[:] = after_geometry
+        cursor[:] = 0
+        tokens = _stream_tokens(obs[0], mats, vecs, sections, cursor)
+        if geometry.shape[0] > 0:
+            tokens.append(geometry)
+        cursor[:] = after_geometry
         action = _fused_action(tokens, mats, vecs, shape, eps, cursor)
         a0 = np.float64(action[0])
         a1 = np.float64(action[1])
@@ -293,8 +293,8 @@ class CompiledActor:
         return core.num_envs == 1 and not self.torch_only and not core.selectors and core.bev is None
 
     def mean_rollout(self, core) -> np.ndarray:
-        """(arcs, 2) normalised actions of env 0's mean rollout in ``core`` from its current state (reset first;
-        ``plays_rollout`` must hold), ``core`` left at its end: the batched loop of `np_policy.sampling` with a batch
+        """(arcs, 2) normalised actions of env 0's mean rollout in ``core`` from its current state (reset first, its
+        observation row as the reset wrote it; ``plays_rollout`` must hold), ``core`` left at its end: the batched loop of `np_policy.sampling` with a batch
         of one and zero noise, arc for arc, in one compiled call (module docstring). ValueError on a non-finite
         action, as the env's step raises."""
         actions = np.empty((int(core.P[K.P_MAX_ARCS]), 2))

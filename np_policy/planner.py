@@ -220,23 +220,16 @@ class NeuralParkerPlanner:
         """The validated ``plan`` succeeds, is steerable and keeps ``accept_mean_m`` of clearance (the anytime test;
         at most the ``limited_clearance``); with ``accept_aligned``, it also ends within the choice's heading slack
         of the target's heading."""
-        return self._accepted_with(scene, plan, self._accept_margin(scene, plan))
-
-    def _accept_margin(self, scene: Scene, plan: Plan) -> float:
-        """The clearance the anytime test asks of ``plan``: ``accept_mean_m`` at most the ``limited_clearance``."""
-        return self.limited_clearance(scene, plan.start, self.config.accept_mean_m)
-
-    def _accepted_with(self, scene: Scene, plan: Plan, margin_m: float) -> bool:
-        """``accepted`` with its clearance ``margin_m`` (``_accept_margin``) already known."""
         if not plan.success:
             return False
+        margin = self.limited_clearance(scene, plan.start, self.config.accept_mean_m)
         weights = self.config.weights
         rows = plan.sample(weights.sample_ds_m)
         if self.config.accept_aligned and heading_gap(rows[-1, 2], scene.target[2]) > math.radians(
                 weights.heading_slack_deg):
             return False
         return (steerable(rows, self.body, weights)
-                and path_valid(scene, rows[:, :3], "footprint", self.body.inflated(margin_m)))
+                and path_valid(scene, rows[:, :3], "footprint", self.body.inflated(margin)))
 
     def grown_mean_rollout(self, scene: Scene, start) -> Plan | None:
         """The mean rollout played with the footprint grown by ``mean_margin_m`` (not validated), or None without
@@ -283,14 +276,10 @@ class NeuralParkerPlanner:
     def accept_implies_valid(self, scene: Scene, plan: Plan) -> bool:
         """Whether the anytime test (``accepted``) of ``plan`` implies the claim check (``claimed``), so that an
         accepted plan is not validated a second time (`np_policy.sampling.clearance_covers_sweep`)."""
-        if self.config.accept_mean_m is None:
+        if self.config.accept_mean_m is None or self.convention != "footprint":
             return False
-        return self._margin_implies_valid(self._accept_margin(scene, plan))
-
-    def _margin_implies_valid(self, margin_m: float) -> bool:
-        """``accept_implies_valid`` for the anytime test's clearance ``margin_m``."""
-        return self.convention == "footprint" and clearance_covers_sweep(
-            self.body, margin_m, self.config.weights.sample_ds_m, self.kappa_limit)
+        margin = self.limited_clearance(scene, plan.start, self.config.accept_mean_m)
+        return clearance_covers_sweep(self.body, margin, self.config.weights.sample_ds_m, self.kappa_limit)
 
     def _anytime_answer_of(self, scene: Scene, plan: Plan | None) -> tuple[Plan | None, bool]:
         """``_anytime_answer`` of ``plan``, or (None, False) without one."""
@@ -299,13 +288,12 @@ class NeuralParkerPlanner:
     def _anytime_answer(self, scene: Scene, plan: Plan) -> tuple[Plan, bool]:
         """(``plan`` validated, whether the anytime test accepts it); an accepted plan is not validated a second
         time where the test implies the rule (``accept_implies_valid``)."""
-        margin = self._accept_margin(scene, plan)
-        if self._margin_implies_valid(margin):
-            if self._accepted_with(scene, plan, margin):
+        if self.accept_implies_valid(scene, plan):
+            if self.accepted(scene, plan):
                 return plan, True
             return self.claimed(scene, plan), False
         plan = self.claimed(scene, plan)
-        return plan, self._accepted_with(scene, plan, margin)
+        return plan, self.accepted(scene, plan)
 
     def _mean_rollout(self, scene: Scene, start) -> Plan:
         """The paper's planner: the mean action rolled out once (the batch of one with zero noise)."""

@@ -83,7 +83,8 @@ class PolicyRollouts:
         self.first_arc, self.nearest = first_arc, bool(nearest)
         self._cores: weakref.WeakKeyDictionary[Scene, BatchCore] = weakref.WeakKeyDictionary()
 
-    def _core(self, scene: Scene) -> BatchCore:
+    def core(self, scene: Scene) -> BatchCore:
+        """The batched env core of ``scene`` these rollouts play in, built once per scene object."""
         core = self._cores.get(scene)
         if core is None:
             core = BatchCore([scene], self.n, self.config, None, nearest=self.nearest)
@@ -103,7 +104,7 @@ class PolicyRollouts:
         """The ``n`` rollouts from ``start`` as plans, successful or not (ConfigError on a start in collision);
         ``seed`` (anything ``np.random.default_rng`` takes) replaces the generator's seed for this call."""
         start = np.asarray(start, float)
-        core = self._core(scene)
+        core = self.core(scene)
         rng = np.random.default_rng(self.seed if seed is None else seed)
         rows = np.arange(self.n)
         core.reset_envs(rows, rng, 0, start)

@@ -25,8 +25,8 @@ def threads(n: int) -> Iterator[None]:
     """``use_threads(n)`` inside the block, the process's previous torch and numba counts restored after it (a run in
     the caller's process plays as a pool worker does, and leaves the caller as it was)."""
     before = torch.get_num_threads(), numba.get_num_threads()
-    use_threads(n)
     try:
+        use_threads(n)
         yield
     finally:
         torch.set_num_threads(before[0])

@@ -1,5 +1,6 @@
 """CompiledActor: the numba mean action equals the torch ActorCritic's to float32 rounding, for every stream
-configuration (full, no LiDAR, ego + LiDAR only) and fusion depth."""
+configuration (full, no LiDAR, ego + LiDAR only) and fusion depth; its compiled mean rollout equals a per-arc loop
+of the whole network bit for bit."""
 
 import numpy as np
 import pytest
@@ -9,7 +10,10 @@ from np_policy.bench_update import synthetic_obs
 from np_policy.config import NetworkConfig
 from np_policy.inference import TORCH_BATCH, CompiledActor
 from np_policy.network import ActorCritic
-from np_sim.config import ObservationConfig
+from np_sim.config import EnvConfig, ObservationConfig
+from np_sim.env_core import BatchCore
+from np_sim.kernels import step as K
+from np_sim.scene import PolygonObstacle, Scene
 
 CONFIGS = {
     "full": (ObservationConfig(), NetworkConfig()),
@@ -49,3 +53,41 @@ def test_wrong_observation_shape_is_a_clear_error():
 
     with pytest.raises(ValueError, match=r"expected observations of shape \(B, 484\), got \(484,\)"):
         actor.batch(np.zeros(484, np.float32))
+
+
+@pytest.mark.parametrize("name", sorted(CONFIGS))
+def test_the_compiled_rollout_plays_the_whole_network_at_every_arc_bit_for_bit(name):
+    """``mean_rollout`` computes the geometry token once per rollout (the slots are the scene's); it plays exactly
+    the arcs of a loop that evaluates the whole network at every arc and steps the env, for every stream
+    configuration: with and without LiDAR, without any geometry slot, with two fusion blocks."""
+    obs_config, net_config = CONFIGS[name]
+    torch.manual_seed(2)
+    model = ActorCritic(obs_config, net_config).eval()
+    with torch.no_grad():  # arcs long and curved enough to wander through the lot for many steps
+        model.actor[-1].weight.mul_(10.0)
+    actor = CompiledActor(model)
+    core = BatchCore([_lot()], 1, EnvConfig(observation=obs_config), None)
+    start = np.array([-10.0, -12.0, 3.0])
+    assert actor.plays_rollout(core)
+    core.reset_envs(np.arange(1), np.random.default_rng(0), 0, start)
+    rolled = actor.mean_rollout(core)
+    core.reset_envs(np.arange(1), np.random.default_rng(0), 0, start)
+    stepped = []
+    while True:
+        action = actor(core.obs[0]).astype(np.float64)
+        stepped.append(action)
+        core.step(action[None])
+        if core.R[0, K.R_TERMINATED] > 0 or core.R[0, K.R_TRUNCATED] > 0:
+            break
+    assert len(stepped) > 10, len(stepped)
+    np.testing.assert_array_equal(rolled, np.array(stepped))
+
+
+def _lot() -> Scene:
+    """A walled lot, a wall between the start side and the target (no early connection) and a box, within every
+    configuration's slots."""
+    boundary = np.array([[-40.0, -30.0], [40.0, -30.0], [40.0, 30.0], [-40.0, 30.0]])
+    boxes = (np.array([[0.0, -30.0], [2.0, -30.0], [2.0, 20.0], [0.0, 20.0]]),
+             np.array([[-25.0, 4.0], [-20.0, 4.0], [-20.0, 7.0], [-25.0, 7.0]]))
+    return Scene(boundary=boundary, obstacles=tuple(PolygonObstacle(b) for b in boxes),
+                 target=np.array([10.0, -6.0, 0.0]), start_region=None, name="lot")

@@ -277,7 +277,7 @@ def test_the_mean_rollout_is_the_batch_of_one_and_matches_a_plain_env_loop(probl
     clip = next(c for c in load_clips("eval") if c.name == "eval-1000009")
     cases = [(scene, start), (clip.frame_scene(0, pose=clip.start), np.asarray(clip.start, float))]
     for case_scene, case_start in cases:
-        assert sampled.actor.plays_rollout(sampled.mean._core(case_scene))
+        assert sampled.actor.plays_rollout(sampled.mean.core(case_scene))
         plan = sampled._mean_rollout(case_scene, case_start)
         np.testing.assert_array_equal(plan.arcs, _env_rollout(sampled, case_scene, case_start))
         batch = PolicyRollouts(sampled.actor, np.zeros(2), sampled.env_config, 3, seed=11)(case_scene, case_start)
