@@ -87,7 +87,7 @@ class GuardedRollout(PolicyRollouts):
         """The guarded rollout from ``start`` as one plan, successful or not (StartInCollisionError on a start in
         collision); ``seed`` is accepted for the rollouts' interface and unused (nothing is drawn)."""
         start = np.asarray(start, float)
-        core = self._core(scene)
+        core = self.core(scene)
         rows = np.arange(self.n)
         core.reset_envs(rows, np.random.default_rng(0), 0, start)
         scale = np.array([self.config.vehicle.kappa_max, self.config.episode.max_length_m])
