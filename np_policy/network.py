@@ -119,6 +119,8 @@ class SceneEncoder(nn.Module):
         n_slots = (obs_config.max_obstacles if self.obstacle is not None else 0) + (
             obs_config.max_boundary_segments if self.boundary is not None else 0)
         self.n_slots = n_slots
+        slot_sections = [self.sections[name] for name in ("obstacles", "boundary") if name in self.sections]
+        self.slot_span = (slot_sections[0][0], slot_sections[-1][1]) if slot_sections else (0, 0)
         if n_slots:
             self.slot_position = nn.Parameter(torch.randn(n_slots, t) * 0.02)
             self.geometry_attention = SelfAttentionBlock(t, net.token_heads, net.token_ff_dim)
@@ -134,19 +136,38 @@ class SceneEncoder(nn.Module):
         a, b = self.sections[name]
         return obs[:, a:b]
 
-    def geometry_tokens(self, obs: torch.Tensor) -> torch.Tensor:
-        """(B, n_slots, token_dim) embedded slot tokens plus positional embeddings (before attention)."""
-        parts = []
+    def geometry_tokens(self, slots: torch.Tensor) -> torch.Tensor:
+        """(B, n_slots, token_dim) embedded slot tokens plus positional embeddings (before attention).
+
+        ``slots`` is the (B, span) slot part of the observations, ``obs[:, slice(*self.slot_span)]``: the obstacle
+        slots, then the boundary slots (adjacent in the flat layout)."""
+        parts, start = [], 0
         if self.obstacle is not None:
-            slots = self._slice(obs, "obstacles").reshape(obs.shape[0], self.obs_config.max_obstacles, -1)
-            parts.append(self.obstacle(slots))
+            size = self.obs_config.max_obstacles * 2 * self.obs_config.vertices_per_obstacle
+            parts.append(self.obstacle(slots[:, :size].reshape(slots.shape[0], self.obs_config.max_obstacles, -1)))
+            start = size
         if self.boundary is not None:
-            slots = self._slice(obs, "boundary").reshape(obs.shape[0], self.obs_config.max_boundary_segments, 4)
-            parts.append(self.boundary(slots))
+            boundary = slots[:, start:].reshape(slots.shape[0], self.obs_config.max_boundary_segments, 4)
+            parts.append(self.boundary(boundary))
         return torch.cat(parts, dim=1) + self.slot_position
 
-    def forward(self, obs: torch.Tensor) -> torch.Tensor:
-        """obs: (B, obs_size) float32 -> (B, fusion_dim)."""
+    def geometry_token(self, slots: torch.Tensor, shared: bool = False) -> torch.Tensor:
+        """(B, fusion_dim) global geometry summary of (B, span) slot rows: slot MLPs, self-attention, mean pool,
+        projection (paper §III-C, the geometry branch of Fig. architecture).
+
+        With ``shared`` the branch runs once per distinct slot row and its result is gathered back: rows of one
+        scene are equal (the slots are fixed in the target frame), so a PPO minibatch of 8,192 training samples
+        holds at most as many distinct rows as there are training scenes (81 on Factorial). The values are the
+        same; only the float summation order of the gradient differs (the duplicates' gradients are added
+        before, not after, the branch's backward pass).
+        """
+        if not shared:
+            return self.geometry_summary(self.geometry_attention(self.geometry_tokens(slots)).mean(dim=1))
+        distinct, row = torch.unique(slots, dim=0, return_inverse=True)
+        return self.geometry_token(distinct)[row]
+
+    def forward(self, obs: torch.Tensor, shared_geometry: bool = False) -> torch.Tensor:
+        """obs: (B, obs_size) float32 -> (B, fusion_dim); ``shared_geometry``: see ``geometry_token``."""
         if obs.shape[-1] != self.obs_size:
             raise ValueError(f"SceneEncoder: expected observations of size {self.obs_size} for "
                              f"sections {self.sections}, got shape {tuple(obs.shape)}")
@@ -154,8 +175,7 @@ class SceneEncoder(nn.Module):
         if self.lidar is not None:
             tokens.append(self.lidar(self._slice(obs, "lidar")))
         if self.n_slots:
-            geometry = self.geometry_attention(self.geometry_tokens(obs))
-            tokens.append(self.geometry_summary(geometry.mean(dim=1)))
+            tokens.append(self.geometry_token(obs[:, self.slot_span[0]:self.slot_span[1]], shared_geometry))
         if self.bev is not None:
             tokens.append(self.bev(self._slice(obs, "bev")))
         fused = self.fusion(torch.stack(tokens, dim=1))
@@ -184,9 +204,11 @@ class ActorCritic(nn.Module):
         with torch.no_grad():
             self.actor[-1].weight.mul_(0.01)
 
-    def distribution(self, obs: torch.Tensor) -> tuple[torch.distributions.Normal, torch.Tensor]:
-        """(per-dimension Normal over the normalised action, value (B,))."""
-        feature = self.encoder(obs)
+    def distribution(self, obs: torch.Tensor, shared_geometry: bool = False
+                     ) -> tuple[torch.distributions.Normal, torch.Tensor]:
+        """(per-dimension Normal over the normalised action, value (B,)); ``shared_geometry``: see
+        ``SceneEncoder.geometry_token``."""
+        feature = self.encoder(obs, shared_geometry)
         mean = self.actor(feature)
         std = self.log_std.exp().expand_as(mean)
         return torch.distributions.Normal(mean, std), self.critic(feature).squeeze(-1)
@@ -198,9 +220,11 @@ class ActorCritic(nn.Module):
         action = dist.sample()
         return action, dist.log_prob(action).sum(-1), value
 
-    def evaluate(self, obs: torch.Tensor, action: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-        """(log-prob (B,), entropy (B,), value (B,)) of stored unclipped actions; differentiable."""
-        dist, value = self.distribution(obs)
+    def evaluate(self, obs: torch.Tensor, action: torch.Tensor, shared_geometry: bool = False
+                 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """(log-prob (B,), entropy (B,), value (B,)) of stored unclipped actions; differentiable.
+        ``shared_geometry``: see ``SceneEncoder.geometry_token``."""
+        dist, value = self.distribution(obs, shared_geometry)
         return dist.log_prob(action).sum(-1), dist.entropy().sum(-1), value
 
     @torch.no_grad()

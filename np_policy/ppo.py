@@ -127,12 +127,14 @@ def minibatch_indices(n: int, batch_size: int, generator: torch.Generator) -> li
 
 
 def accumulate_minibatch_gradient(model: nn.Module, batch: dict[str, torch.Tensor], idx: torch.Tensor,
-                                  config: PPOConfig) -> dict[str, float]:
+                                  config: PPOConfig, shared_geometry: bool = False) -> dict[str, float]:
     """Add the gradient of one minibatch's PPO loss to ``.grad``; returns the minibatch's mean statistics.
 
     loss = L_clip + vf_coef · L_V − ent_coef · H over the minibatch ``idx`` (advantages normalised over all of
     it). The forward/backward passes run in chunks of ``config.update_chunk`` samples, each chunk's loss weighted
     by its share of the minibatch, so the summed gradient is the whole-minibatch gradient up to float rounding.
+    ``shared_geometry`` runs the network's geometry branch once per distinct scene of a chunk
+    (``SceneEncoder.geometry_token``): the same gradient up to float rounding, about 1.6× faster on Factorial.
     """
     adv = batch["advantages"][idx]
     if config.norm_advantages:
@@ -142,7 +144,8 @@ def accumulate_minibatch_gradient(model: nn.Module, batch: dict[str, torch.Tenso
     for start in range(0, n, config.update_chunk):
         part = idx[start:start + config.update_chunk]
         share = len(part) / n
-        log_prob, entropy, value = model.evaluate(batch["obs"][part], batch["actions"][part])
+        log_prob, entropy, value = model.evaluate(batch["obs"][part], batch["actions"][part],
+                                                  shared_geometry=shared_geometry)
         old_log_prob = batch["log_probs"][part]
         policy_loss, value_loss, entropy_mean = clipped_ppo_loss(
             log_prob, old_log_prob, adv[start:start + config.update_chunk], value, batch["returns"][part], entropy,
@@ -160,13 +163,13 @@ def accumulate_minibatch_gradient(model: nn.Module, batch: dict[str, torch.Tenso
 
 
 def ppo_update(model: nn.Module, optimizer: torch.optim.Optimizer, batch: dict[str, torch.Tensor],
-               config: PPOConfig, generator: torch.Generator) -> dict[str, float]:
+               config: PPOConfig, generator: torch.Generator, shared_geometry: bool = False) -> dict[str, float]:
     """``config.repeats`` passes of shuffled minibatches over ``batch``; returns mean loss statistics.
 
     ``batch`` holds flat (M, ...) tensors: ``obs``, ``actions`` (unclipped), ``log_probs``, ``advantages``,
     ``returns`` (critic targets from ``compute_targets``) and, when ``config.value_clip``, ``values``.
     ``model`` is an ``ActorCritic`` (``evaluate(obs, action) -> (log_prob, entropy, value)``). Per minibatch:
-    ``accumulate_minibatch_gradient``, gradient-norm clipping, one optimiser step.
+    ``accumulate_minibatch_gradient`` (with ``shared_geometry``), gradient-norm clipping, one optimiser step.
     """
     stats: dict[str, list[float]] = {"policy_loss": [], "value_loss": [], "entropy": [], "approx_kl": [],
                                      "clip_fraction": [], "grad_norm": []}
@@ -176,7 +179,7 @@ def ppo_update(model: nn.Module, optimizer: torch.optim.Optimizer, batch: dict[s
         for idx in minibatch_indices(n, config.batch_size, generator):  # drawn on the CPU whatever the device
             idx = idx.to(batch["obs"].device)
             optimizer.zero_grad()
-            for key, value in accumulate_minibatch_gradient(model, batch, idx, config).items():
+            for key, value in accumulate_minibatch_gradient(model, batch, idx, config, shared_geometry).items():
                 stats[key].append(value)
             stats["grad_norm"].append(float(nn.utils.clip_grad_norm_(model.parameters(), config.max_grad_norm)))
             optimizer.step()

@@ -1,7 +1,7 @@
 """Train the NeuralParker arc policy with PPO (paper §III-E, Algorithm 1, App. A Table V).
 
 ``python -m np_policy.train --benchmark factorial --seed 0 [--config FILE] [--vehicle sedan|van|FILE] [--epochs N]
-[--out DIR] [--resume] [--device cpu|cuda|auto]``
+[--out DIR] [--resume] [--device cpu|cuda|auto] [--shared-geometry]``
 
 One run reads top to bottom: build the batched env on the training scenes with the geodesic start curriculum
 and the in-loop Hermite ensemble, then per epoch collect 16,384 transitions at a time from the 128 training envs
@@ -19,6 +19,9 @@ footprint checks, LiDAR footprint ranges, start sampling and action bound κ_max
 curvature bound is its κ_max unless the ``--config`` file sets ``env.connector.kappa_max``; the checkpoint stores
 it, and planners for another vehicle refuse the checkpoint. ``--device cuda`` trains the network on a GPU (the
 envs stay on the CPU; what changes is in `np_policy.device`); each metrics row names the device it trained on.
+``--shared-geometry`` runs the network's geometry branch once per distinct scene in each update chunk
+(`np_policy.network.SceneEncoder.geometry_token`): the same recipe and values, another float summation order in
+the gradient, about 1.6× faster updates on Factorial; each metrics row says whether it was on.
 """
 
 from __future__ import annotations
@@ -135,10 +138,12 @@ def recorded_clips(skip: int) -> list:
 class Trainer:
     """State of one training run: model, optimiser, envs, statistics, counters."""
 
-    def __init__(self, config: TrainConfig, out: Path, device: torch.device = torch.device("cpu")):
+    def __init__(self, config: TrainConfig, out: Path, device: torch.device = torch.device("cpu"),
+                 shared_geometry: bool = False):
         self.config = config
         self.out = Path(out)
         self.device = device
+        self.shared_geometry = shared_geometry
         ppo = config.ppo
         use_threads(config.torch_threads)
         torch.manual_seed(config.seed)
@@ -228,7 +233,7 @@ class Trainer:
         batch = {"obs": flat(roll["obs"]), "actions": flat(roll["actions"]), "log_probs": flat(roll["log_probs"]),
                  "advantages": flat(advantages.astype(np.float32)), "returns": flat(returns.astype(np.float32)),
                  "values": flat(roll["values"])}
-        stats = ppo_update(self.model, self.optimizer, batch, ppo, self.shuffle)
+        stats = ppo_update(self.model, self.optimizer, batch, ppo, self.shuffle, self.shared_geometry)
         self.updates += 1
         return stats
 
@@ -402,9 +407,11 @@ def check_epochs(epochs: Any, ppo: PPOConfig) -> int:
     return epochs
 
 
-def _resume(trainer: Trainer, config: TrainConfig, out: Path, last: int) -> list[dict[str, Any]]:
+def _resume(trainer: Trainer, config: TrainConfig, out: Path, last: int,
+            shared_geometry: bool | None = None) -> list[dict[str, Any]]:
     """Restore ``trainer`` from ``out/snapshot.pt`` and return the metrics rows up to its epoch; a warning when this
-    process trains on other thread counts, or on another device, than the last row records."""
+    process trains on other thread counts, on another device or with another ``shared_geometry`` than the last row
+    records (None keeps the row's; rows written before the field trained without it)."""
     snapshot = out / "snapshot.pt"
     payload = load_checkpoint(snapshot)
     missing = sorted(set(trainer.state()) - set(payload) - {"init_checkpoint", "cuda_rng"})
@@ -427,6 +434,12 @@ def _resume(trainer: Trainer, config: TrainConfig, out: Path, last: int) -> list
         print(f"warning: {out}: resuming on {device_label(trainer.device)} where the run so far trained on "
               f"{device_before}: its curve will differ from an uninterrupted run's (other kernels, another sampling "
               "stream)", file=sys.stderr)
+    shared_before = rows[-1].get("shared_geometry", False) if rows else False
+    trainer.shared_geometry = shared_before if shared_geometry is None else shared_geometry
+    if rows and shared_before != trainer.shared_geometry:
+        print(f"warning: {out}: resuming with shared_geometry={trainer.shared_geometry} where the run so far trained "
+              f"with {shared_before}: its curve will differ from an uninterrupted run's in the last bits "
+              f"({'drop' if trainer.shared_geometry else 'give'} --shared-geometry to match)", file=sys.stderr)
     return rows
 
 
@@ -458,7 +471,7 @@ def _train_epoch(trainer: Trainer) -> dict[str, Any]:
             "train_success": float(np.mean(successes)) if successes else float("nan"),
             "episodes": len(returns), "curriculum_fraction": trainer.sampler.fraction,
             "selection_reward": selection, "selection_success": selection_success, **stats, **thread_counts(),
-            "device": device_label(trainer.device)}
+            "device": device_label(trainer.device), "shared_geometry": trainer.shared_geometry}
 
 
 def finished_rows(out: Path, config: TrainConfig) -> list[dict[str, Any]] | None:
@@ -521,9 +534,12 @@ def _write_epoch(trainer: Trainer, out: Path, rows: list[dict[str, Any]], writer
 
 def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resume: bool = False,
           progress: bool = True, init: str | Path | None = None, overwrite: bool = False,
-          tensorboard: bool = True, device: str = "cpu") -> list[dict[str, Any]]:
+          tensorboard: bool = True, device: str = "cpu", shared_geometry: bool | None = None
+          ) -> list[dict[str, Any]]:
     """Run (or resume) training up to ``epochs`` (default: the config's); returns the metrics rows. The network
-    trains on ``device`` (`np_policy.device.training_device`: cpu, cuda, cuda:N or auto). ``init``
+    trains on ``device`` (`np_policy.device.training_device`: cpu, cuda, cuda:N or auto), with the geometry branch
+    once per scene in each update chunk when ``shared_geometry`` (`Trainer.update`; None: off for a new run, as
+    the run's last metrics row records for a resumed one). ``init``
     warm-starts a new run from another checkpoint's weights (``Trainer.initialize_from``). A folder that already
     holds a run is refused unless ``resume`` or ``overwrite`` (`prepare_run_folder`); resuming a finished run
     (`finished_rows`) trains nothing and returns its rows. Every file is written atomically; ``tensorboard``
@@ -538,17 +554,18 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
         (out / "snapshot.pt").unlink(missing_ok=True)  # left by a kill between the last row and its removal
         return done
     prepare_run_folder(out, resume, overwrite)
-    trainer = Trainer(config, out, where)
+    trainer = Trainer(config, out, where, bool(shared_geometry))
     rows: list[dict[str, Any]] = []
     if resume:
-        rows = _resume(trainer, config, out, last)
+        rows = _resume(trainer, config, out, last, shared_geometry)
         if trainer.epoch == last:
             return rows
     elif init is not None:
         trainer.initialize_from(init)
     write_atomic(out / "config.json", json.dumps(config.to_dict(), indent=2).encode())
     write_metrics(out / "metrics.jsonl", rows)
-    record_start(out, epoch=trainer.epoch, **thread_counts(), device=device_label(where))
+    record_start(out, epoch=trainer.epoch, **thread_counts(), device=device_label(where),
+                 shared_geometry=trainer.shared_geometry)
     bar = tqdm(range(trainer.epoch, last), desc="epochs", unit="epoch", disable=not progress,
                initial=trainer.epoch, total=last)
     writer = event_writer(out, rows, trainer.epoch) if tensorboard else None
@@ -621,6 +638,11 @@ def main(argv=None) -> list[dict[str, Any]]:
     parser.add_argument("--device", default="cpu", help="where the network trains: cpu (the default; a resumed run "
                         "repeats an uninterrupted one bit for bit), cuda, cuda:N, or auto (a CUDA GPU when torch "
                         "sees one); the envs always run on the CPU (np_policy.device)")
+    parser.add_argument("--shared-geometry", action=argparse.BooleanOptionalAction, default=None,
+                        help="run the network's geometry branch once per distinct scene in each update chunk: the "
+                        "same values, about 1.6x faster updates on Factorial, another float summation order in the "
+                        "gradient (so a run's curve depends on it; each metrics row records it). Default: off for a "
+                        "new run; --resume keeps what the run recorded")
     parser.add_argument("--tensorboard", action=argparse.BooleanOptionalAction, default=True,
                         help="write the metrics as TensorBoard event files beside metrics.jsonl (view them with "
                         "`tensorboard --logdir <out>`)")
@@ -631,7 +653,7 @@ def main(argv=None) -> list[dict[str, Any]]:
         config = TrainConfig.from_dict(data if args.vehicle is None else with_vehicle(data, args.vehicle))
         out = args.out or Path("results/train") / f"{config.benchmark}_seed{config.seed}"
         rows = train(config, out, epochs=args.epochs, resume=args.resume, init=args.init, overwrite=args.overwrite,
-                     tensorboard=args.tensorboard, device=args.device)
+                     tensorboard=args.tensorboard, device=args.device, shared_geometry=args.shared_geometry)
     except NPSimError as exc:  # the project's own errors (checkpoint, config, scene) are the user's to fix
         raise _fail(str(exc)) from None
     total = config.ppo.epochs

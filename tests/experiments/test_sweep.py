@@ -107,6 +107,17 @@ def test_a_neuralparker_task_given_a_gpu_trains_on_it_and_an_adapted_hope_task_g
     assert "--device" not in train_argv(hope_run, tmp_path / "c.json", gpus=1.0)
 
 
+def test_shared_geometry_starts_new_neuralparker_runs_with_it_and_leaves_resumed_runs_as_they_were(tmp_path):
+    runs = {r.config.trainer: r for r in expand(PAPER_PLAN, [0], tmp_path, ["main"])}
+    np_run, hope_run = runs["np_policy.train"], runs["hope_policy.train"]
+    assert "--shared-geometry" not in train_argv(np_run, tmp_path / "c.json")
+    assert "--shared-geometry" in train_argv(np_run, tmp_path / "c.json", shared_geometry=True)
+    assert "--shared-geometry" not in train_argv(hope_run, tmp_path / "c.json", shared_geometry=True)
+    _fake_run(np_run.run_dir, 3, best=True, snapshot=True)
+    argv = train_argv(np_run, tmp_path / "c.json", shared_geometry=True)
+    assert "--resume" in argv and "--shared-geometry" not in argv  # the trainer keeps what the rows record
+
+
 def test_a_run_trains_on_as_many_torch_and_numba_threads_as_it_has_cpus(monkeypatch):
     monkeypatch.setenv("OMP_NUM_THREADS", "8")
     monkeypatch.setenv("SOMETHING_ELSE", "kept")

@@ -57,6 +57,33 @@ def test_output_shapes_follow_the_observation_config(name):
     assert model.encoder.n_tokens == {"default": 3, "no_lidar": 2, "ego_lidar": 2}[name]
 
 
+SLOT_CONFIGS = {**CONFIGS, "obstacles_only": ObservationConfig(use_boundary=False),
+                "boundary_only": ObservationConfig(use_obstacles=False, use_lidar=False)}
+
+
+@pytest.mark.parametrize("name", list(SLOT_CONFIGS))
+def test_the_shared_geometry_branch_runs_once_per_scene_and_gives_each_sample_its_own_output(name):
+    """Twelve samples of three scenes (equal slot rows; ego and LiDAR their own): each sample's feature with the
+    branch shared over the batch equals that sample's feature computed alone; the attention block sees three rows."""
+    torch.manual_seed(1)
+    config = SLOT_CONFIGS[name]
+    encoder = SceneEncoder(config)
+    obs = make_obs(config, 12, seed=1)
+    scene_rows = make_obs(config, 3, seed=2)
+    a, b = encoder.slot_span
+    assert b - a == sum(stop - start for key, (start, stop) in observation_sections(config).items()
+                        if key in ("obstacles", "boundary"))
+    obs[:, a:b] = scene_rows[torch.arange(12) % 3, a:b]
+    seen = []
+    if encoder.n_slots:
+        encoder.geometry_attention.register_forward_hook(lambda module, args, out: seen.append(args[0].shape[0]))
+    with torch.no_grad():
+        shared = encoder(obs, shared_geometry=True)
+        alone = torch.cat([encoder(obs[i:i + 1]) for i in range(12)])
+    torch.testing.assert_close(shared, alone, rtol=1e-5, atol=1e-5)
+    assert seen[:1] == ([3] if encoder.n_slots else [])
+
+
 def test_wrong_observation_size_is_an_error():
     model = SceneEncoder(ObservationConfig())
     with pytest.raises(ValueError, match="expected observations of size 484"):

@@ -147,33 +147,62 @@ def test_same_seed_gives_the_same_update_on_cpu():
         state_a["actor.0.weight"], state_c["actor.0.weight"])
 
 
-def test_chunked_minibatch_gradient_equals_the_whole_minibatch_gradient():
-    """Chunks of 7 (uneven last chunk) against one pass over the 40-sample minibatch: same gradient, same stats
-    (in float64, so that the comparison is not float32 summation-order noise)."""
-    torch.manual_seed(3)
+def _float64_minibatch(seed: int, scenes: int | None = None):
+    """(model, batch, shuffled indices) of 40 random float64 samples, 3 obstacle and all boundary slots used; with
+    ``scenes`` the slot part of each sample is one of that many scene rows (ego and LiDAR stay the sample's own)."""
+    torch.manual_seed(seed)
     obs_config = ObservationConfig()
     model = ActorCritic(obs_config, NetworkConfig()).double()
-    g = torch.Generator().manual_seed(3)
+    g = torch.Generator().manual_seed(seed)
     n = 40
     obs = torch.randn(n, observation_size(obs_config), generator=g, dtype=torch.float64)
+    if scenes:
+        obs[:, 124:] = torch.randn(scenes, 360, generator=g, dtype=torch.float64)[torch.randint(0, scenes, (n,),
+                                                                                                generator=g)]
     obs[:, 124 + 3 * 16: 124 + 320] = -1e4
     batch = {"obs": obs}
     batch["actions"], batch["log_probs"], batch["values"] = model.act(obs)
     batch["log_probs"] = batch["log_probs"] + 0.3 * torch.randn(n, generator=g, dtype=torch.float64)  # clip some
     batch["advantages"] = torch.randn(n, generator=g, dtype=torch.float64)
     batch["returns"] = torch.randn(n, generator=g, dtype=torch.float64)
-    idx = torch.randperm(n, generator=g)
+    return model, batch, torch.randperm(n, generator=g)
+
+
+def _assert_same_gradient_and_stats(model, batch, idx, first: dict, second: dict) -> dict:
+    """The minibatch gradient and stats of ``accumulate_minibatch_gradient(**first)`` equal those of ``second``
+    (float64: tolerances above summation-order noise, far below a wrong term); returns the first's stats."""
     grads, stats = [], []
-    for chunk in (n, 7):
+    for kwargs in (first, second):
         model.zero_grad()
-        config = PPOConfig(batch_size=n, update_chunk=chunk, value_clip=True)
-        stats.append(accumulate_minibatch_gradient(model, batch, idx, config))
-        grads.append([p.grad.clone() for p in model.parameters()])
-    for whole, chunked in zip(*grads):
-        torch.testing.assert_close(chunked, whole, rtol=1e-7, atol=1e-10)
+        stats.append(accumulate_minibatch_gradient(model, batch, idx, **kwargs))
+        grads.append({name: p.grad.clone() for name, p in model.named_parameters()})
+    for name, grad in grads[0].items():
+        torch.testing.assert_close(grads[1][name], grad, rtol=1e-7, atol=1e-10, msg=name)
     for key in stats[0]:
         assert stats[1][key] == pytest.approx(stats[0][key], rel=1e-9, abs=1e-12), key
-    assert 0.0 < stats[0]["clip_fraction"] < 1.0
+    geometry = ("encoder.slot_position", "encoder.obstacle.0.weight", "encoder.boundary.0.weight",
+                "encoder.geometry_summary.weight")
+    assert all(grads[0][name].abs().max() > 0 for name in geometry)  # the comparison covers the geometry branch
+    return stats[0]
+
+
+def test_chunked_minibatch_gradient_equals_the_whole_minibatch_gradient():
+    """Chunks of 7 (uneven last chunk) against one pass over the 40-sample minibatch: same gradient, same stats."""
+    model, batch, idx = _float64_minibatch(3)
+    n = len(idx)
+    stats = _assert_same_gradient_and_stats(
+        model, batch, idx, {"config": PPOConfig(batch_size=n, update_chunk=n, value_clip=True)},
+        {"config": PPOConfig(batch_size=n, update_chunk=7, value_clip=True)})
+    assert 0.0 < stats["clip_fraction"] < 1.0
+
+
+def test_shared_geometry_gives_the_minibatch_gradient_of_the_per_sample_branch():
+    """40 samples of 5 scenes, chunks of 7: the gradient and the stats with the geometry branch run once per scene
+    equal those with it run per sample."""
+    model, batch, idx = _float64_minibatch(4, scenes=5)
+    config = PPOConfig(batch_size=len(idx), update_chunk=7)
+    _assert_same_gradient_and_stats(model, batch, idx, {"config": config},
+                                    {"config": config, "shared_geometry": True})
 
 
 def test_update_chunk_must_be_positive():

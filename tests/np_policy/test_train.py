@@ -579,3 +579,18 @@ def test_each_start_and_resume_is_logged_with_its_code_and_threads(tmp_path):
     assert all(s["git_commit"] and "git_modified" in s and s["torch_threads"] >= 1 for s in starts)
     train(config, tmp_path / "run", epochs=2, overwrite=True, progress=False)  # a new run: a new log
     assert len((tmp_path / "run" / "provenance.jsonl").read_text().splitlines()) == 1
+
+
+def test_rows_record_shared_geometry_a_resume_keeps_it_and_turning_it_off_warns(tmp_path, capsys):
+    config = TrainConfig.from_dict(TINY)
+    train(config, tmp_path / "run", epochs=2, progress=False, shared_geometry=True)
+    rows = [json.loads(line) for line in (tmp_path / "run" / "metrics.jsonl").read_text().splitlines()]
+    assert [r["shared_geometry"] for r in rows] == [True, True]
+    capsys.readouterr()
+    train(config, tmp_path / "run", epochs=3, resume=True, progress=False)  # keeps what the rows record
+    assert "shared_geometry" not in capsys.readouterr().err
+    train(config, tmp_path / "run", epochs=4, resume=True, progress=False, shared_geometry=False)
+    assert ("resuming with shared_geometry=False where the run so far trained with True"
+            in capsys.readouterr().err)
+    rows = [json.loads(line) for line in (tmp_path / "run" / "metrics.jsonl").read_text().splitlines()]
+    assert [r["shared_geometry"] for r in rows] == [True, True, True, False]
