@@ -43,8 +43,11 @@ CONFIG_DIR = Path(__file__).resolve().parent.parent / "checkpoints" / "configs"
 """Where the sweep's configuration files live (committed)."""
 RECIPE_FILE = "recipe.json"
 """The one NeuralParker recipe every Factorial and Topology-Stress NeuralParker row merges its overrides over."""
-FACTORIAL_EPOCH_S = 46.8
-"""Measured wall-clock seconds per epoch of the Factorial recipe on this 2-core machine (compute estimates)."""
+FACTORIAL_EPOCH_S = 75.3
+"""Seconds per epoch of the Factorial recipe on this machine, on one thread beside one other one-thread run
+(compute estimates): the median ``epoch_s`` of ``factorial_np_fixed_seed0_lot``'s first 29 epochs (66.9 s at
+least). The shipped seeds' 46.8 s was the machine's two cores for one run. A run started with ``--shared-geometry``
+took a median 54.3 s over its first 5 epochs beside it."""
 TOPOLOGY_NP_EPOCH_S = {"none": 41.0, "bev": 88.0, "vertices": 79.0}
 """Seconds per epoch of the NeuralParker-backbone Topology-Stress rows on this machine, each on one thread beside
 one other one-thread run (compute estimates): the median ``epoch_s`` of the finished seed-0 runs (none 40.9 s,
@@ -385,9 +388,9 @@ def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
         lines.append(f"{run.name:<38} {','.join(run.config.tables):<34} {shown:>11}  "
                      f"{describe(state, TRAINERS[run.config.trainer][0].rstrip('s'))}")
     unknown = sum(estimate_hours(r, s) is None for r, s in zip(runs, states))
-    lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine (an estimate: {FACTORIAL_EPOCH_S} s "
-                 f"per Factorial epoch, {min(TOPOLOGY_NP_EPOCH_S.values())}–{max(TOPOLOGY_NP_EPOCH_S.values())} "
-                 f"s per NeuralParker Topology-Stress epoch on one thread beside another run, {SITE_EPOCH_S} s "
+    lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine (an estimate: on one thread beside another run, "
+                 f"{FACTORIAL_EPOCH_S} s per Factorial epoch, {min(TOPOLOGY_NP_EPOCH_S.values())}–"
+                 f"{max(TOPOLOGY_NP_EPOCH_S.values())} s per NeuralParker Topology-Stress epoch, {SITE_EPOCH_S} s "
                  f"per site epoch, {HOPE_EPISODE_S} s per adapted-HOPE episode, "
                  f"{min(HOPE_BACKBONE_EPISODE_S.values())}–{max(HOPE_BACKBONE_EPISODE_S.values())} s per HOPE-style "
                  "backbone episode)"
