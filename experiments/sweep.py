@@ -197,7 +197,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--gpus-per-run", type=non_negative_float,
                         help="GPUs per run (default: 1 when the cluster has GPUs)")
     parser.add_argument("--shared-geometry", action="store_true", help="start new NeuralParker runs with "
-                        "np_policy.train --shared-geometry (about 1.6x faster updates on Factorial; another float "
+                        "np_policy.train --shared-geometry (about 1.5x faster updates on Factorial; another float "
                         "summation order, so another curve); resumed runs keep what they recorded")
     parser.add_argument("--dry-run", action="store_true", help="list the runs, their state and the estimated "
                         "compute left; train nothing")

@@ -134,7 +134,7 @@ def accumulate_minibatch_gradient(model: nn.Module, batch: dict[str, torch.Tenso
     it). The forward/backward passes run in chunks of ``config.update_chunk`` samples, each chunk's loss weighted
     by its share of the minibatch, so the summed gradient is the whole-minibatch gradient up to float rounding.
     ``shared_geometry`` runs the network's geometry branch once per distinct scene of a chunk
-    (``SceneEncoder.geometry_token``): the same gradient up to float rounding, about 1.6× faster on Factorial.
+    (``SceneEncoder.geometry_token``): the same gradient up to float rounding, about 1.5× faster on Factorial.
     """
     adv = batch["advantages"][idx]
     if config.norm_advantages:

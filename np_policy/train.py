@@ -21,7 +21,7 @@ it, and planners for another vehicle refuse the checkpoint. ``--device cuda`` tr
 envs stay on the CPU; what changes is in `np_policy.device`); each metrics row names the device it trained on.
 ``--shared-geometry`` runs the network's geometry branch once per distinct scene in each update chunk
 (`np_policy.network.SceneEncoder.geometry_token`): the same recipe and values, another float summation order in
-the gradient, about 1.6× faster updates on Factorial; each metrics row says whether it was on.
+the gradient, about 1.5× faster updates on Factorial; each metrics row says whether it was on.
 """
 
 from __future__ import annotations
@@ -640,7 +640,7 @@ def main(argv=None) -> list[dict[str, Any]]:
                         "sees one); the envs always run on the CPU (np_policy.device)")
     parser.add_argument("--shared-geometry", action=argparse.BooleanOptionalAction, default=None,
                         help="run the network's geometry branch once per distinct scene in each update chunk: the "
-                        "same values, about 1.6x faster updates on Factorial, another float summation order in the "
+                        "same values, about 1.5x faster updates on Factorial, another float summation order in the "
                         "gradient (so a run's curve depends on it; each metrics row records it). Default: off for a "
                         "new run; --resume keeps what the run recorded")
     parser.add_argument("--tensorboard", action=argparse.BooleanOptionalAction, default=True,
