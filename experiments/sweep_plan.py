@@ -36,6 +36,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from np_sim.config import config_from_dict
 from np_sim.errors import ConfigError
 
@@ -360,10 +362,32 @@ def epochs_left(run: RunSpec, state: RunState) -> int | None:
     return run.epochs
 
 
+MEASURED_EPOCHS = 5
+"""An interrupted run with at least this many timed epochs is estimated at its own median epoch time."""
+
+
+def measured_epoch_s(path: Path) -> float | None:
+    """Median ``epoch_s`` of a ``metrics.jsonl``'s complete rows, None with fewer than `MEASURED_EPOCHS` timed ones
+    (the adapted HOPE's rows have none)."""
+    if not path.exists():
+        return None
+    times = []
+    for line in path.read_text(errors="replace").splitlines():
+        try:
+            times.append(float(json.loads(line)["epoch_s"]))
+        except (ValueError, KeyError, TypeError):
+            continue
+    return float(np.median(times)) if len(times) >= MEASURED_EPOCHS else None
+
+
 def estimate_hours(run: RunSpec, state: RunState) -> float | None:
-    """Estimated wall-clock hours left on this 2-core machine (None when unknown)."""
+    """Estimated wall-clock hours left on this 2-core machine (None when unknown): an interrupted or running run
+    at the median of its own timed epochs (`measured_epoch_s`), any other at its configuration's ``epoch_s``."""
     left = epochs_left(run, state)
-    return None if left is None else left * run.config.epoch_s / 3600
+    if left is None:
+        return None
+    own = measured_epoch_s(run.run_dir / "metrics.jsonl") if state.kind in ("interrupted", "training now") else None
+    return left * (own or run.config.epoch_s) / 3600
 
 
 def describe(state: RunState, unit: str = "epoch") -> str:
@@ -393,6 +417,6 @@ def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
                  f"{max(TOPOLOGY_NP_EPOCH_S.values())} s per NeuralParker Topology-Stress epoch, {SITE_EPOCH_S} s "
                  f"per site epoch, {HOPE_EPISODE_S} s per adapted-HOPE episode, "
                  f"{min(HOPE_BACKBONE_EPISODE_S.values())}–{max(HOPE_BACKBONE_EPISODE_S.values())} s per HOPE-style "
-                 "backbone episode)"
+                 "backbone episode; an interrupted run at the median of its own timed epochs)"
                  + (f", not counting {unknown} run(s) not available yet" if unknown else ""))
     return "\n".join(lines)

@@ -15,7 +15,8 @@ from pathlib import Path
 import pytest
 
 from experiments.sweep import main, run_environment, run_gpus, train_argv
-from experiments.sweep_plan import PAPER_PLAN, active_trainers, expand, load_plan, resolved_config, run_state
+from experiments.sweep_plan import (PAPER_PLAN, active_trainers, estimate_hours, expand, load_plan, resolved_config,
+                                    run_state)
 
 pytestmark = pytest.mark.sweep
 REPO = Path(__file__).resolve().parents[2]
@@ -81,6 +82,17 @@ def test_dry_run_lists_each_folder_state_and_the_compute_left(tmp_path, capsys):
     assert "not counting 2 run(s) not available yet" in out.splitlines()[-1]
     assert main(["--plan", str(plan), "--seeds", "1", "--only", "connector", "--out", str(root), "--dry-run"]) == 0
     assert list(_states(capsys.readouterr().out)) == ["b_seed1"]
+
+
+def test_an_interrupted_run_is_estimated_at_its_own_median_epoch_time(tmp_path):
+    recipe = TINY | {"ppo": TINY["ppo"] | {"epochs": 10, "snapshot_every_epochs": 2}}
+    run = expand(load_plan(str(_plan(tmp_path, recipe, epoch_s=3600.0)))[0], [1], tmp_path / "runs", ["main"],
+                 tmp_path)[0]
+    _fake_run(run.run_dir, 4)
+    assert estimate_hours(run, run_state(run)) == 6.0      # four rows without epoch_s: the plan's hour per epoch
+    rows = [{"epoch": e, "epoch_s": t} for e, t in enumerate([1800, 1800, 900, 1800, 7200, 1800], start=1)]
+    (run.run_dir / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    assert estimate_hours(run, run_state(run)) == 4 * 0.5  # 10 - 6 epochs left at the median 1,800 s
 
 
 def test_each_state_gets_the_train_flags_that_continue_it(tmp_path):
