@@ -6,7 +6,9 @@ One real collect of the Factorial recipe (seed 0, the curriculum at full range, 
 1,024 transitions as one update chunk with random advantages and returns; the chunk's PPO gradient in float64 (the
 reference: per-sample and shared agree to about 1e-10 there) against float32 per sample and float32 shared. Then the
 origin: the per-sample float32 error of two geometry tensors on 1,024 synthetic observations with the unused slots at
-the −1e4 sentinel (`np_policy.bench_update.synthetic_obs`) and with every slot used (no sentinel).
+the −1e4 sentinel (`np_policy.bench_update.synthetic_obs`) and with every slot used (no sentinel). Last, the same
+errors for the trained network (the shipped seed 0, ``checkpoints/runs/factorial_np_seed0_lot/best.pt``) on a
+collect it plays itself.
 """
 
 import copy
@@ -16,6 +18,7 @@ from pathlib import Path
 import torch
 
 from np_policy.bench_update import synthetic_obs
+from np_policy.checkpoint import load_checkpoint, load_weights
 from np_policy.config import PPOConfig, TrainConfig
 from np_policy.ppo import accumulate_minibatch_gradient
 from np_policy.train import Trainer, benchmark_defaults, merge_config
@@ -80,6 +83,12 @@ def main() -> None:
     for label, synthetic in (("unused slots at the -1e4 sentinel", with_sentinel), ("every slot used", every_slot)):
         errors = float32_error(trainer.model, chunk_batch(trainer.model, synthetic), names)
         print(f"- {label}: " + ", ".join(f"{e:.1e}" for e in errors))
+    trained = ROOT / "checkpoints/runs/factorial_np_seed0_lot/best.pt"
+    load_weights(trainer.model, load_checkpoint(trained)["model"], trained, "policy")
+    obs = torch.from_numpy(trainer.collect()["obs"].reshape(-1, trainer.model.encoder.obs_size)[:1024].copy())
+    errors = float32_error(trainer.model, chunk_batch(trainer.model, obs), PARAMETERS)
+    print(f"\ntrained network ({trained.relative_to(ROOT)}), a chunk of its own collect, per-sample float32 relative "
+          "error:\n" + "\n".join(f"- `{name}`: {e:.1e}" for name, e in zip(PARAMETERS, errors)))
 
 
 if __name__ == "__main__":
