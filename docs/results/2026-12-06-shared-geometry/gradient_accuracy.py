@@ -51,13 +51,25 @@ def float32_error(model, batch, names: tuple[str, ...]) -> list[float]:
     return [((single[n] - reference[n]).norm() / reference[n].norm()).item() for n in names]
 
 
-def main() -> None:
-    torch.set_num_threads(1)
+def factorial_trainer() -> Trainer:
+    """A trainer of the shipped seed 0's recipe with the curriculum at full range (an untrained network)."""
     overrides = json.loads((ROOT / "checkpoints/runs/factorial_np_seed0_lot/config.json").read_text())
     data = merge_config(benchmark_defaults("factorial"), overrides)
     data.update(benchmark="factorial", seed=0)
     trainer = Trainer(TrainConfig.from_dict(data), Path("/tmp/gradient_accuracy_run"))
     trainer.sampler.set_fraction(1.0)
+    return trainer
+
+
+def collect_obs():
+    """(untrained network, the 16,384 observations of its trainer's first collect)."""
+    trainer = factorial_trainer()
+    return trainer.model, torch.from_numpy(trainer.collect()["obs"].reshape(-1, trainer.model.encoder.obs_size).copy())
+
+
+def main() -> None:
+    torch.set_num_threads(1)
+    trainer = factorial_trainer()
     obs = torch.from_numpy(trainer.collect()["obs"].reshape(-1, trainer.model.encoder.obs_size)[:1024].copy())
     batch = chunk_batch(trainer.model, obs)
     wide = {k: v.double() for k, v in batch.items()}
