@@ -14,10 +14,10 @@ runs the configuration's trainer (``python -m np_policy.train``; ``hope_policy.t
 subprocess (its log under ``--log-dir``): with ``--resume`` when the
 folder holds ``snapshot.pt``, from epoch 0 otherwise (``--overwrite`` when a run killed before its first snapshot
 left files there). ``--shared-geometry`` starts new NeuralParker runs with the trainer's ``--shared-geometry``
-(the geometry branch once per scene in each update chunk); a resumed run keeps what its rows record. Finished runs are skipped, so a killed sweep continues where
-it stopped when started again. A run that a ``np_policy.train`` process on this machine is writing, or whose
-folder holds another configuration, is left alone and reported. Progress: one bar over the runs, with each
-running run's epoch read from its ``metrics.jsonl``.
+(the geometry branch once per scene in each update chunk); a resumed run keeps what its rows record. Finished runs
+are skipped, so a killed sweep continues where it stopped when started again. A run that a ``np_policy.train``
+process on this machine is writing, or whose folder holds another configuration, is left alone and reported.
+Progress: one bar over the runs, with each running run's epoch read from its ``metrics.jsonl``.
 """
 
 from __future__ import annotations

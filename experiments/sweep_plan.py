@@ -268,18 +268,24 @@ def expand(plan, seeds, root: Path, only=None, config_dir: Path = CONFIG_DIR) ->
     return runs
 
 
+def metrics_values(path: Path, key: str, kind: type = float) -> list:
+    """``kind(row[key])`` of every complete row of a ``metrics.jsonl`` that has it (none when the file is absent);
+    a torn last line is skipped."""
+    if not path.exists():
+        return []
+    values = []
+    for line in path.read_text(errors="replace").splitlines():
+        try:
+            values.append(kind(json.loads(line)[key]))
+        except (ValueError, KeyError, TypeError):
+            continue
+    return values
+
+
 def metrics_epoch(path: Path, key: str = "epoch") -> int:
     """The ``key`` (epoch; episodes for the adapted HOPE) of the last complete row of a ``metrics.jsonl`` (0 when
     absent or empty); a torn last line is skipped."""
-    if not path.exists():
-        return 0
-    epoch = 0
-    for line in path.read_text(errors="replace").splitlines():
-        try:
-            epoch = int(json.loads(line)[key])
-        except (ValueError, KeyError, TypeError):
-            continue
-    return epoch
+    return (metrics_values(path, key, int) or [0])[-1]
 
 
 def config_conflicts(run: RunSpec) -> list[str]:
@@ -369,14 +375,7 @@ MEASURED_EPOCHS = 5
 def measured_epoch_s(path: Path) -> float | None:
     """Median ``epoch_s`` of a ``metrics.jsonl``'s complete rows, None with fewer than `MEASURED_EPOCHS` timed ones
     (the adapted HOPE's rows have none)."""
-    if not path.exists():
-        return None
-    times = []
-    for line in path.read_text(errors="replace").splitlines():
-        try:
-            times.append(float(json.loads(line)["epoch_s"]))
-        except (ValueError, KeyError, TypeError):
-            continue
+    times = metrics_values(path, "epoch_s")
     return float(np.median(times)) if len(times) >= MEASURED_EPOCHS else None
 
 
@@ -412,8 +411,8 @@ def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
         lines.append(f"{run.name:<38} {','.join(run.config.tables):<34} {shown:>11}  "
                      f"{describe(state, TRAINERS[run.config.trainer][0].rstrip('s'))}")
     unknown = sum(estimate_hours(r, s) is None for r, s in zip(runs, states))
-    lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine (an estimate: on one thread beside another run, "
-                 f"{FACTORIAL_EPOCH_S} s per Factorial epoch, {min(TOPOLOGY_NP_EPOCH_S.values())}–"
+    lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine (an estimate: on one thread beside "
+                 f"another run, {FACTORIAL_EPOCH_S} s per Factorial epoch, {min(TOPOLOGY_NP_EPOCH_S.values())}–"
                  f"{max(TOPOLOGY_NP_EPOCH_S.values())} s per NeuralParker Topology-Stress epoch, {SITE_EPOCH_S} s "
                  f"per site epoch, {HOPE_EPISODE_S} s per adapted-HOPE episode, "
                  f"{min(HOPE_BACKBONE_EPISODE_S.values())}–{max(HOPE_BACKBONE_EPISODE_S.values())} s per HOPE-style "

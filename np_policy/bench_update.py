@@ -113,12 +113,10 @@ def measure(batch: int = 8192, forward_batch: int = 128, repeats: int = 5, threa
     update_ms = {min(chunk, batch): _update_ms(model, optimizer, data, PPOConfig(
         batch_size=batch, repeats=1, update_chunk=min(chunk, batch)), g, repeats) for chunk in chunks}
     bound_chunk = min(_RECIPE.update_chunk, batch)
-    per_scene_ms = _update_ms(model, optimizer, data, PPOConfig(batch_size=batch, repeats=1, update_chunk=bound_chunk),
-                              g, repeats, shared_geometry=True)
-    per_sample_ms = update_ms.get(bound_chunk) or _update_ms(model, optimizer, data, PPOConfig(
-        batch_size=batch, repeats=1, update_chunk=bound_chunk), g, repeats)
-    update_gflop, matmul_ms = update_work(model, optimizer, data,
-                                          PPOConfig(batch_size=batch, repeats=1, update_chunk=bound_chunk), g)
+    bound_config = PPOConfig(batch_size=batch, repeats=1, update_chunk=bound_chunk)
+    per_scene_ms = _update_ms(model, optimizer, data, bound_config, g, repeats, shared_geometry=True)
+    per_sample_ms = update_ms.get(bound_chunk) or _update_ms(model, optimizer, data, bound_config, g, repeats)
+    update_gflop, matmul_ms = update_work(model, optimizer, data, bound_config, g)
     peak = sgemm_gflops()
 
     small = synthetic_obs(obs_config, forward_batch, g, scenes)
