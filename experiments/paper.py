@@ -98,6 +98,18 @@ class ArmResult:
     arm: Arm
     records: dict[int, list[dict]] = field(default_factory=dict)
     missing: dict[int, str] = field(default_factory=dict)
+    shared_geometry: dict[int, str] = field(default_factory=dict)
+    """Measured seeds trained with `np_policy.train --shared-geometry`: 'all epochs' or the epochs that were."""
+
+    def shared_geometry_text(self) -> str:
+        """'–', or 'seed 1' / 'seeds 1, 2 (seed 2: epochs 121–240)' for the seeds in `shared_geometry`."""
+        if not self.shared_geometry:
+            return "–"
+        seeds = sorted(self.shared_geometry)
+        partial = "; ".join(f"seed {s}: {self.shared_geometry[s]}" for s in seeds
+                            if self.shared_geometry[s] != "all epochs")
+        return (f"seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}"
+                + (f" ({partial})" if partial else ""))
 
     def seeds_text(self) -> str:
         """'2 of 3 (seeds 0, 1; seed 2: training, epoch 95 of 240)' or '0 of 3 seeds: not trained yet (…)'."""
@@ -204,6 +216,30 @@ def epoch_hours(metrics: Path) -> float:
     return seconds / 3600.0
 
 
+def shared_geometry_epochs(metrics: Path) -> str:
+    """'' when no epoch of a run's ``metrics.jsonl`` trained with the shared geometry branch (rows without the field
+    predate it: off), 'all epochs' when every one did, else the epochs that did ('epochs 121–240', 'epochs 1–5,
+    9'); a torn last line is skipped."""
+    flags = {}
+    for line in metrics.read_text(errors="replace").splitlines() if metrics.exists() else []:
+        try:
+            row = json.loads(line)
+            flags[int(row["epoch"])] = row.get("shared_geometry") is True
+        except (ValueError, KeyError, TypeError):
+            continue
+    shared = [epoch for epoch, flag in flags.items() if flag]
+    if not shared:
+        return ""
+    if len(shared) == len(flags):
+        return "all epochs"
+    spans, start = [], shared[0]
+    for previous, epoch in zip(shared, shared[1:] + [None]):
+        if epoch != previous + 1:
+            spans.append(f"{start}–{previous}" if previous > start else str(start))
+            start = epoch
+    return "epochs " + ", ".join(spans)
+
+
 def measure(arm: Arm, runs: dict, episodes: int, evaluate: bool, active: dict) -> ArmResult:
     """Records of every finished seed of ``arm`` (evaluating a finished run that has none when ``evaluate``)."""
     result = ArmResult(arm)
@@ -236,6 +272,9 @@ def measure(arm: Arm, runs: dict, episodes: int, evaluate: bool, active: dict) -
             result.missing[seed] = f"{folder / 'records.csv'} has {len(rows)} episodes, expected {episodes}"
             continue
         result.records[seed] = rows
+        shared = shared_geometry_epochs(run.run_dir / "metrics.jsonl")
+        if shared:
+            result.shared_geometry[seed] = shared
     return result
 
 
@@ -570,10 +609,10 @@ def status_lines(results: dict[str, list[ArmResult]]) -> list[str]:
         for r in arms:
             feeds.setdefault(r.arm, []).append(label)
             by_arm[r.arm] = r
-    lines = ["| Row (configuration, evaluation) | Feeds | Seeds |", "|---|---|---|"]
+    lines = ["| Row (configuration, evaluation) | Feeds | Seeds | Shared geometry branch |", "|---|---|---|---|"]
     for arm, r in by_arm.items():
         lines.append(f"| {arm.label} (`{arm.configuration}`, {arm.evaluation}) | "
-                     f"{', '.join(f'`{t}`' for t in feeds[arm])} | {r.seeds_text()} |")
+                     f"{', '.join(f'`{t}`' for t in feeds[arm])} | {r.seeds_text()} | {r.shared_geometry_text()} |")
     return lines
 
 
@@ -674,7 +713,10 @@ def build_report(runs_root: Path, out_md: Path, evaluate: bool = True) -> str:
              "draw, or the clipped Gaussian sample where the mask is off) seeded per start. "
              "A claim is checked only when every row it compares has at least two seeds; a "
              "gap within the larger seed SD of the two rows is 'within noise'. Which runs are still missing and "
-             "how to train them: [sweep.md](sweep.md).", "",
+             "how to train them: [sweep.md](sweep.md). The rows table's last column names the seeds trained with "
+             "`np_policy.train --shared-geometry`: the same recipe and network, the geometry branch computed once "
+             "per distinct scene, so another float summation order ([its check](results/2026-12-06-shared-geometry.md)"
+             ").", "",
              "Regenerate with `python -m experiments.paper` (about a minute here when the evaluation records exist; "
              "a finished run without records is evaluated first, about five minutes per seed and evaluation on this "
              "2-core machine; `--no-evaluate` skips that). The single figures: `python -m experiments.scenes`, "

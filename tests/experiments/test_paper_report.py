@@ -15,7 +15,8 @@ from shapely.geometry import Point
 from cli_helpers import one_error_line
 from experiments import hermite_case, overview_case, paper, scenes
 from experiments.paper import (ARMS, CLAIMS, Arm, ArmResult, Claim, claim_verdict, compare, epoch_hours,
-                               evaluation_argv, generalisation_lines, measure, summarise)
+                               evaluation_argv, generalisation_lines, measure, shared_geometry_epochs,
+                               summarise)
 from experiments.paper_numbers import METRICS, TABLES
 from experiments.sweep_plan import PAPER_PLAN, expand
 from np_sim.benchmarks import load_benchmark
@@ -129,6 +130,22 @@ def test_epoch_hours_reads_both_row_formats(tmp_path):
     assert epoch_hours(tmp_path / "absent.jsonl") == 0.0
 
 
+def test_shared_geometry_epochs_read_from_the_metrics_rows(tmp_path):
+    metrics = tmp_path / "metrics.jsonl"
+    assert shared_geometry_epochs(metrics) == ""  # absent
+    flags = [None] * 3 + [True] * 2 + [False] + [True] * 3  # rows without the field predate the flag: off
+    metrics.write_text("".join(json.dumps({"epoch": e, **({} if f is None else {"shared_geometry": f})}) + "\n"
+                               for e, f in enumerate(flags, start=1)) + '{"epoch": 10, "shared')  # torn last line
+    assert shared_geometry_epochs(metrics) == "epochs 4–5, 7–9"
+    metrics.write_text("".join(json.dumps({"epoch": e, "shared_geometry": e != 2}) + "\n" for e in (1, 2, 3)))
+    assert shared_geometry_epochs(metrics) == "epochs 1, 3"
+    metrics.write_text("".join(json.dumps({"epoch": e, "shared_geometry": True}) + "\n" for e in (1, 2)))
+    assert shared_geometry_epochs(metrics) == "all epochs"
+    result = ArmResult(Arm("A", "x"), shared_geometry={2: "epochs 121–240", 0: "all epochs"})
+    assert result.shared_geometry_text() == "seeds 0, 2 (seed 2: epochs 121–240)"
+    assert ArmResult(Arm("A", "x")).shared_geometry_text() == "–"
+
+
 def test_measure_counts_only_finished_evaluated_seeds(tmp_path):
     runs = {(r.config.name, r.seed): r for r in expand(PAPER_PLAN, (0, 1, 2), tmp_path)}
     seed0 = tmp_path / "factorial_np_fixed_seed0_lot"
@@ -142,6 +159,12 @@ def test_measure_counts_only_finished_evaluated_seeds(tmp_path):
     (tmp_path / "factorial_np_fixed_seed1_lot" / "snapshot.pt").write_bytes(b"")
     fixed = measure(Arm("Fixed Hermite", "factorial_np_fixed"), runs, 2, evaluate=False, active={})
     assert sorted(fixed.records) == [0] and fixed.records[0][1]["key"] == ("a", 1)
+    assert fixed.shared_geometry == {}  # its rows predate the flag
+    rows = (seed0 / "metrics.jsonl").read_text().splitlines()
+    (seed0 / "metrics.jsonl").write_text("".join(json.dumps({**json.loads(r), "shared_geometry": True}) + "\n"
+                                                 for r in rows))
+    measured = measure(Arm("Fixed Hermite", "factorial_np_fixed"), runs, 2, evaluate=False, active={})
+    assert measured.shared_geometry == {0: "all epochs"} and measured.shared_geometry_text() == "seed 0"
     assert fixed.seeds_text() == ("1 of 3 (seed 0; seed 1: not trained yet (interrupted, epoch 100 of 240); "
                                   "seed 2: not trained yet (not started))")
     ensemble = measure(Arm("Ensemble, eval. only", "factorial_np_fixed", "ensemble"), runs, 2, False, {})
