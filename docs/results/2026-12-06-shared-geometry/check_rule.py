@@ -4,7 +4,8 @@ Rule: the check run (``factorial_np`` seed 0 trained with ``--shared-geometry``)
 1,080 frozen Factorial starts is at least the three seeds' mean minus two sample SDs (the seeds trained without the
 flag), and at least 0.963, the figure the rule wrote down from the rounded 0.985 ± 0.011 (the exact mean minus two
 SDs is 0.9620; the stricter of the two applies). Printed for information beside it: success on the validation starts of the training scenes, and the path
-metrics of each run on the common-success cohort of all four runs.
+metrics of each run on the common-success cohort of all four runs, and each run's training curve in four windows of
+60 epochs (mean ``train_success`` of its ``metrics.jsonl`` rows).
 
     python docs/results/2026-12-06-shared-geometry/check_rule.py [--runs checkpoints/runs]
 """
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import json
 import math
 from pathlib import Path
 from statistics import mean, stdev
@@ -39,6 +41,13 @@ def success(rows: dict) -> float:
     return mean(int(r["success"]) for r in rows.values())
 
 
+def curve_windows(run: Path, width: int = 60) -> list[float]:
+    """Mean training success over epochs 1–60, 61–120, 121–180, 181–240 of the run's ``metrics.jsonl``."""
+    rows = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines() if line.strip()]
+    success = {int(r["epoch"]): float(r["train_success"]) for r in rows}
+    return [mean(success[e] for e in range(a, a + width) if e in success) for a in range(1, 241, width)]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--runs", type=Path, default=Path("checkpoints/runs"))
@@ -62,6 +71,9 @@ def main() -> None:
             spread = stdev(per_seed) if len(per_seed) > 1 else math.nan
             print(f"  {metric} on the common-success cohort (n = {len(cohort)}): seeds {mean(per_seed):.3f} ± "
                   f"{spread:.3f}, check run {ours:.3f}")
+    print("training success, mean over epochs 1-60 / 61-120 / 121-180 / 181-240:")
+    for name in (*SEEDS, CHECK):
+        print(f"  {name}: " + " / ".join(f"{v:.3f}" for v in curve_windows(root / name)))
 
 
 if __name__ == "__main__":
