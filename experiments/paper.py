@@ -43,7 +43,8 @@ from experiments.common import run_folder
 from experiments.progress import holds_progress
 from experiments.paper_numbers import (CURRICULUM, GLOBAL_FAMILY, HERMITE, HIGHER_IS_BETTER, MAIN_COMPARISON,
                                        METRIC_NAMES, METRICS, TOPOLOGY_STRESS, TWOSTAGE, PaperTable)
-from experiments.sweep_plan import PAPER_PLAN, TRAINERS, RunSpec, active_trainers, expand, run_state
+from experiments.sweep_plan import (PAPER_PLAN, TRAINERS, RunSpec, active_trainers, expand, metrics_rows,
+                                    run_state)
 from np_sim.benchmarks import load_benchmark
 from np_sim.benchmarks.frozen import VALIDATION_STARTS_PER_SCENE
 from np_sim.cli import cli_boundary
@@ -203,12 +204,9 @@ def row_seconds(row: dict, steps: int) -> float:
 
 def epoch_hours(metrics: Path) -> float:
     """Wall-clock hours of a run's epochs (updates, for the adapted HOPE): the sum of `row_seconds`."""
-    if not metrics.exists():
-        return 0.0
     seconds, steps = 0.0, 0
-    for line in metrics.read_text(errors="replace").splitlines():
+    for row in metrics_rows(metrics):
         try:
-            row = json.loads(line)
             seconds += row_seconds(row, steps)
             steps = int(row["env_steps"])
         except (ValueError, KeyError, TypeError, ZeroDivisionError):
@@ -221,9 +219,8 @@ def shared_geometry_epochs(metrics: Path) -> str:
     predate it: off), 'all epochs' when every one did, else the epochs that did ('epochs 121–240', 'epochs 1–5,
     9'); a torn last line is skipped."""
     flags = {}
-    for line in metrics.read_text(errors="replace").splitlines() if metrics.exists() else []:
+    for row in metrics_rows(metrics):
         try:
-            row = json.loads(line)
             flags[int(row["epoch"])] = row.get("shared_geometry") is True
         except (ValueError, KeyError, TypeError):
             continue

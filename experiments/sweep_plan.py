@@ -268,15 +268,29 @@ def expand(plan, seeds, root: Path, only=None, config_dir: Path = CONFIG_DIR) ->
     return runs
 
 
+def metrics_rows(path: Path) -> list[dict]:
+    """The complete rows of a ``metrics.jsonl`` as dicts (none when the file is absent); a torn last line, or any
+    line that is not a JSON object, is skipped."""
+    if not path.exists():
+        return []
+    rows = []
+    for line in path.read_text(errors="replace").splitlines():
+        try:
+            row = json.loads(line)
+        except ValueError:
+            continue
+        if isinstance(row, dict):
+            rows.append(row)
+    return rows
+
+
 def metrics_values(path: Path, key: str, kind: type = float) -> list:
     """``kind(row[key])`` of every complete row of a ``metrics.jsonl`` that has it (none when the file is absent);
     a torn last line is skipped."""
-    if not path.exists():
-        return []
     values = []
-    for line in path.read_text(errors="replace").splitlines():
+    for row in metrics_rows(path):
         try:
-            values.append(kind(json.loads(line)[key]))
+            values.append(kind(row[key]))
         except (ValueError, KeyError, TypeError):
             continue
     return values

@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 
 from experiments.sweep import main, run_environment, run_gpus, train_argv
-from experiments.sweep_plan import (PAPER_PLAN, active_trainers, estimate_hours, expand, load_plan, resolved_config,
-                                    run_state)
+from experiments.sweep_plan import (PAPER_PLAN, active_trainers, estimate_hours, expand, load_plan, metrics_rows,
+                                    metrics_values, resolved_config, run_state)
 
 pytestmark = pytest.mark.sweep
 REPO = Path(__file__).resolve().parents[2]
@@ -82,6 +82,15 @@ def test_dry_run_lists_each_folder_state_and_the_compute_left(tmp_path, capsys):
     assert "not counting 2 run(s) not available yet" in out.splitlines()[-1]
     assert main(["--plan", str(plan), "--seeds", "1", "--only", "connector", "--out", str(root), "--dry-run"]) == 0
     assert list(_states(capsys.readouterr().out)) == ["b_seed1"]
+
+
+def test_metrics_rows_keep_complete_objects_and_skip_torn_or_foreign_lines(tmp_path):
+    path = tmp_path / "metrics.jsonl"
+    assert metrics_rows(path) == [] and metrics_values(path, "epoch") == []  # no file yet: a run not started
+    path.write_text('{"epoch": 1, "epoch_s": 80.5}\n7\n["epoch", 2]\n\n{"epoch": 2}\n{"epoch": "x"}\n{"epoch": 3, "ep')
+    assert metrics_rows(path) == [{"epoch": 1, "epoch_s": 80.5}, {"epoch": 2}, {"epoch": "x"}]
+    assert metrics_values(path, "epoch", int) == [1, 2]  # "x" is no epoch number
+    assert metrics_values(path, "epoch_s") == [80.5]
 
 
 def test_an_interrupted_run_is_estimated_at_its_own_median_epoch_time(tmp_path):
