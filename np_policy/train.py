@@ -423,24 +423,34 @@ def _resume(trainer: Trainer, config: TrainConfig, out: Path, last: int,
     if last < trainer.epoch:
         raise ConfigError(f"train: --epochs {last}: the snapshot is already at epoch {trainer.epoch}")
     rows = [r for r in read_metrics(out / "metrics.jsonl") if r["epoch"] <= trainer.epoch]
-    before = {k: rows[-1][k] for k in thread_counts() if rows and k in rows[-1]}
+    last_row = rows[-1] if rows else {}
+    trainer.shared_geometry = last_row.get("shared_geometry", False) if shared_geometry is None else shared_geometry
+    for mismatch in _resume_mismatches(last_row, trainer):
+        print(f"warning: {out}: resuming {mismatch}", file=sys.stderr)
+    return rows
+
+
+def _resume_mismatches(last_row: dict[str, Any], trainer: Trainer) -> list[str]:
+    """How this process differs from the last metrics row of the run it resumes (none without a row): thread counts,
+    device, ``shared_geometry``; rows written before a field existed trained on the CPU, without the shared branch."""
+    if not last_row:
+        return []
+    mismatches = []
+    before = {k: last_row[k] for k in thread_counts() if k in last_row}
     now = {k: v for k, v in thread_counts().items() if k in before}
     if before != now:  # a reduction split over other threads differs in its last bits
-        print(f"warning: {out}: resuming on {now} where the run so far trained on {before}: its curve will differ "
-              f"from an uninterrupted run's in the last bits (set OMP_NUM_THREADS and NUMBA_NUM_THREADS to match)",
-              file=sys.stderr)
-    device_before = rows[-1].get("device", "cpu") if rows else None  # rows before the field trained on the CPU
-    if device_before is not None and device_before != device_label(trainer.device):
-        print(f"warning: {out}: resuming on {device_label(trainer.device)} where the run so far trained on "
-              f"{device_before}: its curve will differ from an uninterrupted run's (other kernels, another sampling "
-              "stream)", file=sys.stderr)
-    shared_before = rows[-1].get("shared_geometry", False) if rows else False
-    trainer.shared_geometry = shared_before if shared_geometry is None else shared_geometry
-    if rows and shared_before != trainer.shared_geometry:
-        print(f"warning: {out}: resuming with shared_geometry={trainer.shared_geometry} where the run so far trained "
-              f"with {shared_before}: its curve will differ from an uninterrupted run's in the last bits "
-              f"({'drop' if trainer.shared_geometry else 'give'} --shared-geometry to match)", file=sys.stderr)
-    return rows
+        mismatches.append(f"on {now} where the run so far trained on {before}: its curve will differ from an "
+                          "uninterrupted run's in the last bits (set OMP_NUM_THREADS and NUMBA_NUM_THREADS to match)")
+    device_before, device_now = last_row.get("device", "cpu"), device_label(trainer.device)
+    if device_before != device_now:
+        mismatches.append(f"on {device_now} where the run so far trained on {device_before}: its curve will differ "
+                          "from an uninterrupted run's (other kernels, another sampling stream)")
+    shared_before = last_row.get("shared_geometry", False)
+    if shared_before != trainer.shared_geometry:
+        mismatches.append(f"with shared_geometry={trainer.shared_geometry} where the run so far trained with "
+                          f"{shared_before}: its curve will differ from an uninterrupted run's in the last bits "
+                          f"({'drop' if trainer.shared_geometry else 'give'} --shared-geometry to match)")
+    return mismatches
 
 
 def _train_epoch(trainer: Trainer) -> dict[str, Any]:
