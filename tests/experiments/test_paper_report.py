@@ -15,8 +15,8 @@ from shapely.geometry import Point
 from cli_helpers import one_error_line
 from experiments import hermite_case, overview_case, paper, scenes
 from experiments.paper import (ARMS, CLAIMS, Arm, ArmResult, Claim, claim_verdict, compare, epoch_hours,
-                               evaluation_argv, generalisation_lines, measure, shared_geometry_epochs,
-                               summarise)
+                               evaluation_argv, exact_rule_section, generalisation_lines, measure, read_records,
+                               shared_geometry_epochs, summarise)
 from experiments.paper_numbers import METRICS, TABLES
 from experiments.sweep_plan import PAPER_PLAN, expand
 from np_sim.benchmarks import load_benchmark
@@ -111,6 +111,25 @@ def test_generalisation_table_sets_test_success_beside_the_training_scenes_on_sh
     assert lines[2] == "| A | 0, 1 | 0.750 ± 0.354 | 0.750 ± 0.354 | 0.000 ± 0.707 |"
     assert len(lines) == 4 and lines[3] == ""
     assert generalisation_lines(test[1:], validation[1:])[0].startswith("No row has a seed measured on both sets yet")
+
+
+def test_exact_rule_section_counts_successes_that_also_pass_the_exact_rule(tmp_path):
+    def rows(pairs):  # (success, exact) per episode
+        return [{"key": ("s", j), "success": ok, "exact": exact} for j, (ok, exact) in enumerate(pairs)]
+    fixed = ArmResult(Arm("Fixed", "f"), {0: rows([(1, 1), (1, 1), (1, 0), (0, 0)]),
+                                         1: rows([(1, 1), (1, 1), (1, 1), (0, 0)])})
+    old = ArmResult(Arm("Old", "o"), {0: rows([(1, None), (1, None)])})  # records written before the column
+    same = ArmResult(Arm("Reference", "f"), fixed.records)  # another table's row on the same records
+    lines = exact_rule_section({"tab:a": [fixed, old], "tab:b": [fixed, same]})
+    # seed 0: 3/4 sampled, 2/4 exact, 2/3 of the successes; seed 1: 3/4, 3/4, all of them
+    assert lines[-2] == "| Fixed / Reference (`f`, own) | 0, 1 | 0.750 ± 0.000 | 0.625 ± 0.177 | 0.833 ± 0.236 |"
+    assert sum(line.startswith("| Fixed") for line in lines) == 1 and not any("Old" in line for line in lines)
+    record = tmp_path / "records.csv"
+    record.write_text("scene,start_id,success,reason,L,reversals,delta_kappa,plan_time_ms,exact_ref_point_valid\n"
+                      "a,0,1,,10.0,1,0.5,2.0,0\n")
+    assert read_records(record)[0]["exact"] == 0
+    record.write_text("scene,start_id,success,reason,L,reversals,delta_kappa,plan_time_ms\na,0,1,,10.0,1,0.5,2.0\n")
+    assert read_records(record)[0]["exact"] is None
 
 
 def _metrics(folder: Path, epochs: int, seconds: float, timed_from: int | None = None) -> None:
