@@ -6,18 +6,20 @@
 Each run is a (configuration, benchmark, seed) with its own run folder under ``--out`` (default
 ``checkpoints/runs``); the plan and how a folder's state is decided are in `experiments.sweep_plan`. The sweep
 starts a local Ray sized to this machine (or joins the cluster at ``--ray-address``; the run root must then be on
-storage every node shares, with the project installed on every node) and submits one Ray task per run that is
-not finished, requesting ``--cpus-per-run`` CPUs and, where the cluster has GPUs, ``--gpus-per-run`` GPUs for each
+storage every node shares, with the project installed on every node) and submits one Ray task per run that is not
+finished, requesting ``--cpus-per-run`` CPUs and, where the cluster has GPUs, ``--gpus-per-run`` GPUs for each
 NeuralParker run (`GPU_TRAINERS`), which then trains its network with ``--device cuda`` (`np_policy.device`; a run
-resumed on another device than it trained on so far continues another curve, and the trainer warns). A task
-runs the configuration's trainer (``python -m np_policy.train``; ``hope_policy.train`` for the adapted HOPE) in a
-subprocess (its log under ``--log-dir``): with ``--resume`` when the
-folder holds ``snapshot.pt``, from epoch 0 otherwise (``--overwrite`` when a run killed before its first snapshot
-left files there). ``--shared-geometry`` starts new NeuralParker runs with the trainer's ``--shared-geometry``
-(the geometry branch once per scene in each update chunk); a resumed run keeps what its rows record. Finished runs
-are skipped, so a killed sweep continues where it stopped when started again. A run that a ``np_policy.train``
-process on this machine is writing, or whose folder holds another configuration, is left alone and reported.
-Progress: one bar over the runs, with each running run's epoch read from its ``metrics.jsonl``.
+resumed on another device than it trained on so far continues another curve, and the trainer warns). A task runs the
+configuration's trainer (``python -m np_policy.train``; ``hope_policy.train`` for the adapted HOPE) in a subprocess
+(its log under ``--log-dir``): with ``--resume`` when the folder holds ``snapshot.pt``, from epoch 0 otherwise
+(``--overwrite`` when a run killed before its first snapshot left files there). ``--shared-geometry`` starts new
+NeuralParker runs with the trainer's ``--shared-geometry`` (the geometry branch once per scene in each update
+chunk); a resumed run keeps what its rows record. Finished runs are skipped, so a killed sweep continues where it
+stopped when started again. A trainer sent SIGTERM or SIGUSR1 (a preempting cluster, ``kill -USR1 PID``) writes its
+snapshot after the epoch in progress and stops; the sweep reports it as stopped and exits with the trainer's status
+(128 + the signal's number), 1 when a run failed. A run that a ``np_policy.train`` process on this machine is
+writing, or whose folder holds another configuration, is left alone and reported. Progress: one bar over the runs,
+with each running run's epoch read from its ``metrics.jsonl``.
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from experiments.sweep_plan import TRAINERS, RunSpec, RunState, active_trainers,
     holds_run_files, load_plan, metrics_epoch, run_state
 from np_sim.cli import non_negative_float, non_negative_int, positive_int
 from np_sim.errors import ConfigError
+from np_sim.stop_request import STOPPED_EXIT_STATUSES
 
 RUNNABLE = ("not started", "interrupted", "started, no snapshot")
 """States the sweep trains; the others are finished, left alone, or not available yet."""
@@ -171,8 +174,7 @@ def run_sweep(todo: list[RunSpec], args) -> list[dict[str, Any]]:
                     result = {"run": run.name, "rc": -1, "log": str(Path(args.log_dir) / f"{run.name}.log"),
                               "tail": f"{type(exc).__name__}: {exc}"[-2000:]}
                 results.append(result)
-                verdict = "done" if result["rc"] == 0 else f"FAILED (exit {result['rc']}, log {result['log']})"
-                bar.write(f"{run.name}: {verdict}")
+                bar.write(f"{run.name}: {task_verdict(result)}")
                 bar.update(1)
             bar.set_postfix_str(_progress_text(list(pending.values()), since), refresh=True)
     ray.shutdown()
@@ -238,11 +240,26 @@ def main(argv=None) -> int:
         print("sweep: interrupted; its trainers are stopped. Run the same command again to continue: finished runs "
               "are skipped, interrupted ones resume from their snapshot.", file=sys.stderr)
         return 130
-    failed = [r for r in results if r["rc"] != 0]
+    failed = [r for r in results if r["rc"] != 0 and r["rc"] not in STOPPED_EXIT_STATUSES]
+    stopped = [r for r in results if r["rc"] in STOPPED_EXIT_STATUSES]
     for result in failed:
         print(f"{result['run']}: training failed (exit {result['rc']}); end of {result['log']}:\n{result['tail']}",
               file=sys.stderr)
-    return 1 if failed else 0
+    for result in stopped:
+        print(f"{result['run']}: {task_verdict(result)}", file=sys.stderr)
+    return 1 if failed else stopped[0]["rc"] if stopped else 0
+
+
+def task_verdict(result: dict[str, Any]) -> str:
+    """What a finished task's exit status says of its run: done, stopped on request at a snapshot
+    (`np_sim.stop_request`: the next sweep resumes it), or failed."""
+    rc = result["rc"]
+    if rc == 0:
+        return "done"
+    if rc in STOPPED_EXIT_STATUSES:
+        return (f"stopped by {signal.Signals(rc - 128).name} at a snapshot; the same sweep command resumes it "
+                f"(log {result['log']})")
+    return f"FAILED (exit {rc}, log {result['log']})"
 
 
 def _report_skipped(runs: list[RunSpec], states: list[RunState]) -> None:

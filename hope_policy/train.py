@@ -18,7 +18,9 @@ critic, as a truncation) and not counted. That makes an update boundary a comple
 state: ``snapshot.pt`` (every ``snapshot_every`` updates, and where ``max_updates`` stops a run) holds the weights,
 both optimisers, the critic copy, the normalisation statistics, the counters and the generator states, and a run
 resumed from it computes bit for bit what the uninterrupted run computes. A finished run keeps only its outputs:
-once ``final.pt`` is written the snapshot is removed, and ``--resume`` on a finished run trains nothing.
+once ``final.pt`` is written the snapshot is removed, and ``--resume`` on a finished run trains nothing. SIGTERM
+or SIGUSR1 stops a run after the update in progress with a snapshot there and exit status 128 + the signal's number
+(`np_sim.stop_request`).
 ``metrics.jsonl`` gets one line per update and TensorBoard event files beside it hold the same scalars.
 """
 
@@ -27,6 +29,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -56,6 +59,7 @@ from np_sim.config import config_from_dict
 from np_sim.curriculum import CurriculumSchedule, CurriculumStartSampler
 from np_sim.errors import ConfigError
 from np_sim.provenance import PROVENANCE_FILE, record_start
+from np_sim.stop_request import StopRequest, TrainingStopped
 
 BENCHMARKS = ("factorial", "topology")
 RUN_FILES = ("metrics.jsonl", "snapshot.pt", "final.pt")
@@ -320,7 +324,8 @@ def train(config: HopeTrainConfig, out: str | Path, resume: bool = False, overwr
     ``max_updates`` stops earlier, after that many updates in total (a snapshot is written there). The files of an
     update are written in an order a kill cannot make lie: the metrics row, then ``final.pt`` when the budget is
     spent, then the snapshot (removed instead once ``final.pt`` exists). Resuming a finished run (`finished_rows`)
-    trains nothing and returns its rows."""
+    trains nothing and returns its rows. SIGTERM or SIGUSR1 ends the run after the update in progress, with a
+    snapshot there (`np_sim.stop_request.TrainingStopped`)."""
     out = Path(out)
     if resume and not overwrite and (done := finished_rows(out, config)) is not None:
         (out / "snapshot.pt").unlink(missing_ok=True)  # left by a kill between final.pt and its removal
@@ -342,20 +347,25 @@ def train(config: HopeTrainConfig, out: str | Path, resume: bool = False, overwr
     writer = SummaryWriter(str(out), purge_step=trainer.updates + 1 if resume else None)
     bar = tqdm(total=config.episodes, initial=min(trainer.episodes, config.episodes), desc="episodes",
                unit="ep", disable=not progress)
-    while not trainer.done and (max_updates is None or trainer.updates < max_updates):
-        row = trainer.step()
-        rows.append(row)
-        write_metrics(metrics_path, rows)
-        _log(writer, row)
-        if trainer.done:
-            save_hope_checkpoint(out / "final.pt", trainer.policy_payload())
-            (out / "snapshot.pt").unlink(missing_ok=True)
-        elif trainer.updates % config.snapshot_every == 0 or trainer.updates == max_updates:
-            save_hope_checkpoint(out / "snapshot.pt", trainer.state())
-        bar.update(min(row["episodes"], config.episodes) - bar.n)
-        bar.set_postfix(ret=f"{row['train_return']:.2f}", succ=f"{row['train_success']:.2f}")
-    bar.close()
-    writer.close()
+    try:
+        with StopRequest() as stop:
+            while not trainer.done and (max_updates is None or trainer.updates < max_updates):
+                row = trainer.step()
+                rows.append(row)
+                write_metrics(metrics_path, rows)
+                _log(writer, row)
+                if trainer.done:
+                    save_hope_checkpoint(out / "final.pt", trainer.policy_payload())
+                    (out / "snapshot.pt").unlink(missing_ok=True)
+                elif stop.requested or trainer.updates % config.snapshot_every == 0 or trainer.updates == max_updates:
+                    save_hope_checkpoint(out / "snapshot.pt", trainer.state())
+                bar.update(min(row["episodes"], config.episodes) - bar.n)
+                bar.set_postfix(ret=f"{row['train_return']:.2f}", succ=f"{row['train_success']:.2f}")
+                if stop.requested and not trainer.done:
+                    raise TrainingStopped(out, f"update {trainer.updates} ({trainer.episodes} episodes)", stop.signum)
+    finally:
+        bar.close()
+        writer.close()
     return rows
 
 
@@ -427,7 +437,11 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     args = parser.parse_args(argv)
     config = build_config(args)
     out = args.out or Path("results/hope_train") / f"{config.benchmark}_seed{config.seed}"
-    rows = train(config, out, resume=args.resume, overwrite=args.overwrite)
+    try:
+        rows = train(config, out, resume=args.resume, overwrite=args.overwrite)
+    except TrainingStopped as stopped:
+        print(stopped, file=sys.stderr)
+        raise SystemExit(stopped.exit_status) from None
     print(f"{out}: finished after {len(rows)} updates, {rows[-1]['episodes'] if rows else 0} episodes "
           "(metrics.jsonl, final.pt; no snapshot)")
     return rows

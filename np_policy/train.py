@@ -3,25 +3,27 @@
 ``python -m np_policy.train --benchmark factorial --seed 0 [--config FILE] [--vehicle sedan|van|FILE] [--epochs N]
 [--out DIR] [--resume] [--device cpu|cuda|auto] [--shared-geometry]``
 
-One run reads top to bottom: build the batched env on the training scenes with the geodesic start curriculum
-and the in-loop Hermite ensemble, then per epoch collect 16,384 transitions at a time from the 128 training envs
-until at least 60,000 steps are in, after each collect run 10 shuffled passes of minibatches of 8,192
-(Tianshou's on-policy trainer semantics, spec §6), then score 32 full-range training-distribution episodes
-with the deterministic policy for checkpoint selection (never a frozen evaluation episode). Every epoch appends
-a line to ``metrics.jsonl`` (statistics, and its wall-clock split into ``collect_s``, ``update_s`` and
-``selection_s``) and redraws ``curves.png``; TensorBoard event files beside it hold the same scalars
-(``--no-tensorboard`` leaves them out); ``best.pt`` holds the selected policy; ``snapshot.pt`` (every 20 epochs,
-and at the last epoch of a run stopped early with ``--epochs``) holds everything needed to resume exactly — on CPU
-a resumed run gives the same curve as an uninterrupted one. A run whose last metrics row is epoch ``ppo.epochs`` is
-finished: its snapshot (optimiser and env state, about three times the size of ``best.pt``) is removed, and
-``--resume`` on it says it is finished. ``--vehicle`` trains for another vehicle (`np_sim.vehicle`): the env's
-footprint checks, LiDAR footprint ranges, start sampling and action bound κ_max follow it, and the connector's
-curvature bound is its κ_max unless the ``--config`` file sets ``env.connector.kappa_max``; the checkpoint stores
-it, and planners for another vehicle refuse the checkpoint. ``--device cuda`` trains the network on a GPU (the
-envs stay on the CPU; what changes is in `np_policy.device`); each metrics row names the device it trained on.
-``--shared-geometry`` runs the network's geometry branch once per distinct scene in each update chunk
-(`np_policy.network.SceneEncoder.geometry_token`): the same recipe and values, another float summation order in
-the gradient, about 1.5× faster updates on Factorial; each metrics row says whether it was on.
+One run reads top to bottom: build the batched env on the training scenes with the geodesic start curriculum and the
+in-loop Hermite ensemble, then per epoch collect 16,384 transitions at a time from the 128 training envs until at
+least 60,000 steps are in, after each collect run 10 shuffled passes of minibatches of 8,192 (Tianshou's on-policy
+trainer semantics, spec §6), then score 32 full-range training-distribution episodes with the deterministic policy
+for checkpoint selection (never a frozen evaluation episode). Every epoch appends a line to ``metrics.jsonl``
+(statistics, and its wall-clock split into ``collect_s``, ``update_s`` and ``selection_s``) and redraws
+``curves.png``; TensorBoard event files beside it hold the same scalars (``--no-tensorboard`` leaves them out);
+``best.pt`` holds the selected policy; ``snapshot.pt`` (every ``ppo.snapshot_every_epochs``, 20 by default and 10 in
+the sweep's recipe, and at the last epoch of a run stopped early with ``--epochs``) holds everything needed to
+resume exactly — on CPU a resumed run gives the same curve as an uninterrupted one. A run whose last metrics row is
+epoch ``ppo.epochs`` is finished: its snapshot (optimiser and env state, about three times the size of ``best.pt``)
+is removed, and ``--resume`` on it says it is finished. SIGTERM or SIGUSR1 (``kill -USR1 PID``) stops a run after
+the epoch in progress with a snapshot there and exit status 128 + the signal's number (`np_sim.stop_request`); a
+second one ends it at once. ``--vehicle`` trains for another vehicle (`np_sim.vehicle`): the env's footprint checks,
+LiDAR footprint ranges, start sampling and action bound κ_max follow it, and the connector's curvature bound is its
+κ_max unless the ``--config`` file sets ``env.connector.kappa_max``; the checkpoint stores it, and planners for
+another vehicle refuse the checkpoint. ``--device cuda`` trains the network on a GPU (the envs stay on the CPU; what
+changes is in `np_policy.device`); each metrics row names the device it trained on. ``--shared-geometry`` runs the
+network's geometry branch once per distinct scene in each update chunk
+(`np_policy.network.SceneEncoder.geometry_token`): the same recipe and values, another float summation order in the
+gradient, about 1.5× faster updates on Factorial; each metrics row says whether it was on.
 """
 
 from __future__ import annotations
@@ -54,6 +56,7 @@ from np_sim.cli import vehicle_spec
 from np_sim.errors import ConfigError, NPSimError
 from np_sim.provenance import PROVENANCE_FILE, record_start
 from np_sim.scene import Scene
+from np_sim.stop_request import StopRequest, TrainingStopped
 from np_sim.starts import UniformStartSampler, fixed_start_sampler
 
 SITE_POOL_FILE = "site_pool.pkl"
@@ -553,7 +556,8 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
     warm-starts a new run from another checkpoint's weights (``Trainer.initialize_from``). A folder that already
     holds a run is refused unless ``resume`` or ``overwrite`` (`prepare_run_folder`); resuming a finished run
     (`finished_rows`) trains nothing and returns its rows. Every file is written atomically; ``tensorboard``
-    also logs each row to TensorBoard event files in ``out`` (`event_writer`)."""
+    also logs each row to TensorBoard event files in ``out`` (`event_writer`). SIGTERM or SIGUSR1 during training
+    ends it after the epoch in progress, with a snapshot there: `np_sim.stop_request.TrainingStopped`."""
     if init is not None and resume:
         raise ConfigError("train: --init starts a new run from another checkpoint; --resume continues this run's "
                           "snapshot — give one of them")
@@ -580,12 +584,15 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
                initial=trainer.epoch, total=last)
     writer = event_writer(out, rows, trainer.epoch) if tensorboard else None
     try:
-        for _ in bar:
-            row = _train_epoch(trainer)
-            rows.append(row)
-            _write_epoch(trainer, out, rows, writer, last)
-            bar.set_postfix(steps_s=f"{row['steps_per_s']:,.0f}", ret=f"{row['train_return']:.0f}",
-                            succ=f"{row['train_success']:.2f}", cur=f"{row['curriculum_fraction']:.2f}")
+        with StopRequest() as stop:
+            for _ in bar:
+                row = _train_epoch(trainer)
+                rows.append(row)
+                _write_epoch(trainer, out, rows, writer, trainer.epoch if stop.requested else last)
+                bar.set_postfix(steps_s=f"{row['steps_per_s']:,.0f}", ret=f"{row['train_return']:.0f}",
+                                succ=f"{row['train_success']:.2f}", cur=f"{row['curriculum_fraction']:.2f}")
+                if stop.requested and trainer.epoch < last:
+                    raise TrainingStopped(out, f"epoch {trainer.epoch} of {last}", stop.signum)
     finally:
         if writer is not None:
             writer.close()
@@ -666,6 +673,9 @@ def main(argv=None) -> list[dict[str, Any]]:
                      tensorboard=args.tensorboard, device=args.device, shared_geometry=args.shared_geometry)
     except NPSimError as exc:  # the project's own errors (checkpoint, config, scene) are the user's to fix
         raise _fail(str(exc)) from None
+    except TrainingStopped as stopped:
+        print(stopped, file=sys.stderr)
+        raise SystemExit(stopped.exit_status) from None
     total = config.ppo.epochs
     if rows and rows[-1]["epoch"] == total:
         print(f"{out}: finished at epoch {total} of {total} (metrics.jsonl, curves.png, best.pt; no snapshot)")

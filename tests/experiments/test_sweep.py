@@ -14,7 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from experiments.sweep import main, run_environment, run_gpus, train_argv
+from experiments import sweep as sweep_module
+from experiments.sweep import main, run_environment, run_gpus, task_verdict, train_argv
 from experiments.sweep_plan import (PAPER_PLAN, active_trainers, estimate_hours, expand, load_plan, metrics_rows,
                                     metrics_values, resolved_config, run_state)
 
@@ -181,6 +182,24 @@ def test_bad_arguments_are_one_error_line(tmp_path, capsys):
         assert main(["--plan", str(tmp_path / "bad.json"), "--dry-run"]) == 2
         err = capsys.readouterr().err
         assert err.startswith(f"error: {tmp_path / 'bad.json'}: configurations[") and message in err, err
+
+
+def test_a_run_stopped_by_a_signal_is_reported_as_resumable_not_failed(tmp_path, capsys, monkeypatch):
+    """A trainer that wrote its snapshot on SIGTERM exits with 143: the sweep names it stopped, resumable by the same
+    command, and exits with that status; a failure among the runs makes the status 1."""
+    plan = _plan(tmp_path, TINY)
+    argv = ["--plan", str(plan), "--seeds", "0", "--out", str(tmp_path / "runs"), "--log-dir", str(tmp_path / "l")]
+    results = [{"run": "a_seed0_lot", "rc": 0, "log": "a.log", "tail": ""},
+               {"run": "b_seed0", "rc": 128 + signal.SIGTERM, "log": "b.log", "tail": "stopped by SIGTERM"}]
+    monkeypatch.setattr(sweep_module, "run_sweep", lambda todo, args: results)
+    assert main(argv) == 143
+    err = capsys.readouterr().err
+    assert "b_seed0: stopped by SIGTERM at a snapshot; the same sweep command resumes it (log b.log)" in err
+    assert "failed" not in err and "a_seed0_lot" not in err
+    results.append({"run": "x", "rc": 1, "log": "x.log", "tail": "Traceback"})
+    assert main(argv) == 1
+    assert "x: training failed (exit 1); end of x.log:\nTraceback" in capsys.readouterr().err
+    assert task_verdict(results[0]) == "done" and task_verdict(results[2]) == "FAILED (exit 1, log x.log)"
 
 
 def test_paper_plan_recognises_the_shipped_runs():

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -14,10 +15,12 @@ import pytest
 import torch
 
 from cli_helpers import one_error_line
+from stop_helpers import signal_after
 from hope_policy.checkpoint import load_hope_checkpoint
 from hope_policy.ppo import HopePPOConfig
-from hope_policy.train import HopeTrainConfig, main, train
+from hope_policy.train import HopeTrainConfig, HopeTrainer, main, train
 from np_policy.checkpoint import CheckpointError
+from np_sim.stop_request import TrainingStopped
 
 TIMING = ("collect_s", "update_s")
 ROOT = Path(__file__).resolve().parents[2]
@@ -57,6 +60,24 @@ def test_resume_at_an_update_boundary_is_bit_for_bit_the_uninterrupted_run(strai
     for branch, stats in a["obs_norm"].items():
         np.testing.assert_array_equal(stats["mean"], b["obs_norm"][branch]["mean"])
         np.testing.assert_array_equal(stats["m2"], b["obs_norm"][branch]["m2"])
+
+
+def test_sigusr1_stops_a_run_after_its_update_with_a_snapshot_and_the_resume_repeats_the_straight_run(
+        straight_run, tmp_path, monkeypatch):
+    """SIGUSR1 during update 1 of a run snapshotting every 5 updates: a snapshot at update 1, TrainingStopped with
+    the shell's status for the signal, the handlers back as they were; the resume repeats the uninterrupted run."""
+    _, straight_rows = straight_run
+    real_step = HopeTrainer.step
+    monkeypatch.setattr(HopeTrainer, "step", signal_after(real_step, signal.SIGUSR1, lambda t: t.updates == 1))
+    handler, config = signal.getsignal(signal.SIGUSR1), dataclasses.replace(tiny_config(), snapshot_every=5)
+    with pytest.raises(TrainingStopped, match="stopped by SIGUSR1 after update 1 ") as stopped:
+        train(config, tmp_path, progress=False, max_updates=2)
+    assert stopped.value.exit_status == 128 + signal.SIGUSR1 and signal.getsignal(signal.SIGUSR1) == handler
+    assert load_hope_checkpoint(tmp_path / "snapshot.pt")["updates"] == 1 and len(json_rows(tmp_path)) == 1
+    monkeypatch.setattr(HopeTrainer, "step", real_step)
+    rows = train(config, tmp_path, resume=True, progress=False, max_updates=2)
+    strip = lambda r: {k: v for k, v in r.items() if k not in TIMING}  # noqa: E731
+    assert [strip(r) for r in rows] == [strip(r) for r in straight_rows]
 
 
 def test_a_run_writes_its_files_and_stops_after_its_episode_budget(tmp_path):

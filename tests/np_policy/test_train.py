@@ -7,14 +7,17 @@ import sys
 import json
 import re
 import shutil
+import signal
 
 import pytest
 import torch
 
 from np_policy.checkpoint import LEGACY_FORMAT, CheckpointError, load_checkpoint, save_checkpoint
 from np_policy.checkpoint import main as checkpoint_main
+from np_policy import train as train_module
 from np_policy.train import TrainConfig, Trainer, benchmark_defaults, main, train
 from np_sim.errors import ConfigError
+from stop_helpers import signal_after
 
 TINY = {"benchmark": "examples", "seed": 3, "curriculum_pool": 32,
         "ppo": {"num_train_envs": 16, "num_test_envs": 4, "selection_episodes": 8, "steps_per_collect": 256,
@@ -425,6 +428,31 @@ def test_a_finished_run_drops_its_snapshot_and_resuming_it_says_it_is_finished(t
     with pytest.raises(SystemExit):  # without --resume a finished run is still refused
         main(argv)
     assert "already holds a training run (metrics.jsonl, best.pt)" in capsys.readouterr().err
+
+
+def test_sigterm_stops_a_run_after_its_epoch_with_a_snapshot_and_the_resume_repeats_the_straight_run(
+        tmp_path, capsys, monkeypatch):
+    """SIGTERM during epoch 1 (snapshots every 2 epochs): the run writes a snapshot at epoch 1, exits with status
+    143 (128 + SIGTERM) and one line saying so; --resume then ends where an uninterrupted run ends, bit for bit."""
+    cfg = tmp_path / "tiny.json"
+    cfg.write_text(json.dumps({k: v for k, v in TINY.items() if k not in ("benchmark", "seed")}))
+    argv = ["--benchmark", "examples", "--config", str(cfg), "--out"]
+    main(argv + [str(tmp_path / "straight")])
+    monkeypatch.setattr(train_module, "_train_epoch",
+                        signal_after(train_module._train_epoch, signal.SIGTERM, lambda t: t.epoch == 1))
+    run = tmp_path / "stopped"
+    handler = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv + [str(run)])
+    assert exit_info.value.code == 143 and signal.getsignal(signal.SIGTERM) == handler
+    err = capsys.readouterr().err
+    assert err.strip().splitlines()[-1] == (f"{run}: stopped by SIGTERM after epoch 1 of 4; snapshot.pt written, "
+                                            "continue it with --resume")
+    assert [r["epoch"] for r in _rows(run)] == [1] and load_checkpoint(run / "snapshot.pt")["epoch"] == 1
+    main(argv + [str(run), "--resume"])
+    assert _rows(run) == _rows(tmp_path / "straight")
+    wa, wb = (load_checkpoint(folder / "best.pt")["model"] for folder in (tmp_path / "straight", run))
+    assert all(torch.equal(wa[k], wb[k]) for k in wa)
 
 
 def test_tensorboard_events_hold_the_metrics_rows_and_a_resume_purges_what_the_kill_left(tmp_path):
