@@ -415,7 +415,8 @@ def describe(state: RunState, unit: str = "epoch") -> str:
 
 
 def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
-    """The dry-run listing: one line per run with its state and estimated hours left, then the total."""
+    """The dry-run listing: one line per run with its state and estimated hours left, then the total, then how to
+    stop the runs training now without losing their epochs (`np_sim.stop_request`)."""
     lines = [f"{'run':<38} {'tables':<34} {'est. h left':>11}  state"]
     total = 0.0
     for run, state in zip(runs, states):
@@ -432,4 +433,8 @@ def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
                  f"{min(HOPE_BACKBONE_EPISODE_S.values())}–{max(HOPE_BACKBONE_EPISODE_S.values())} s per HOPE-style "
                  "backbone episode; an interrupted run at the median of its own timed epochs)"
                  + (f", not counting {unknown} run(s) not available yet" if unknown else ""))
+    training = [s.detail.removeprefix("pid ") for s in states if s.kind == "training now"]
+    if training:
+        lines.append("to stop the runs training now after the epoch (update) in progress, with a snapshot the sweep "
+                     f"resumes: kill -USR1 {' '.join(training)}")
     return "\n".join(lines)

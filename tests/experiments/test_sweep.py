@@ -16,8 +16,8 @@ import pytest
 
 from experiments import sweep as sweep_module
 from experiments.sweep import main, run_environment, run_gpus, task_verdict, train_argv
-from experiments.sweep_plan import (PAPER_PLAN, active_trainers, estimate_hours, expand, load_plan, metrics_rows,
-                                    metrics_values, resolved_config, run_state)
+from experiments.sweep_plan import (PAPER_PLAN, active_trainers, estimate_hours, expand, format_table, load_plan,
+                                    metrics_rows, metrics_values, resolved_config, run_state)
 
 pytestmark = pytest.mark.sweep
 REPO = Path(__file__).resolve().parents[2]
@@ -103,6 +103,18 @@ def test_an_interrupted_run_is_estimated_at_its_own_median_epoch_time(tmp_path):
     rows = [{"epoch": e, "epoch_s": t} for e, t in enumerate([1800, 1800, 900, 1800, 7200, 1800], start=1)]
     (run.run_dir / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
     assert estimate_hours(run, run_state(run)) == 4 * 0.5  # 10 - 6 epochs left at the median 1,800 s
+
+
+def test_the_dry_run_says_how_to_stop_the_runs_training_now_without_losing_epochs(tmp_path):
+    run = expand(load_plan(str(_plan(tmp_path, TINY)))[0], [0], tmp_path / "runs", ["main"], tmp_path)[0]
+    _fake_run(run.run_dir, 1)
+    idle = format_table([run], [run_state(run)]).splitlines()
+    assert idle[-1].startswith("estimated compute left")
+    state = run_state(run, {run.run_dir.resolve(): 4321})
+    assert (state.kind, state.detail) == ("training now", "pid 4321")
+    assert format_table([run], [state]).splitlines()[-1] == (
+        "to stop the runs training now after the epoch (update) in progress, with a snapshot the sweep resumes: "
+        "kill -USR1 4321")
 
 
 def test_each_state_gets_the_train_flags_that_continue_it(tmp_path):
