@@ -15,11 +15,12 @@ configuration's trainer (``python -m np_policy.train``; ``hope_policy.train`` fo
 (``--overwrite`` when a run killed before its first snapshot left files there). ``--shared-geometry`` starts new
 NeuralParker runs with the trainer's ``--shared-geometry`` (the geometry branch once per scene in each update
 chunk); a resumed run keeps what its rows record. Finished runs are skipped, so a killed sweep continues where it
-stopped when started again. A trainer sent SIGTERM or SIGUSR1 (a preempting cluster, ``kill -USR1 PID``) writes its
-snapshot after the epoch in progress and stops; the sweep reports it as stopped and exits with the trainer's status
-(128 + the signal's number), 1 when a run failed. A run that a ``np_policy.train`` process on this machine is
-writing, or whose folder holds another configuration, is left alone and reported. Progress: one bar over the runs,
-with each running run's epoch read from its ``metrics.jsonl``.
+stopped when started again; Ctrl-C first lets its trainers finish their epoch and write a snapshot
+(`stop_trainers`). A trainer sent SIGTERM or SIGUSR1 (a preempting cluster, ``kill -USR1 PID``) writes its snapshot
+after the epoch in progress and stops; the sweep reports it as stopped and exits with the trainer's status (128 +
+the signal's number), 1 when a run failed. A run that a ``np_policy.train`` process on this machine is writing, or
+whose folder holds another configuration, is left alone and reported. Progress: one bar over the runs, with each
+running run's epoch read from its ``metrics.jsonl``.
 """
 
 from __future__ import annotations
@@ -237,6 +238,7 @@ def main(argv=None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        stop_trainers(todo)
         print("sweep: interrupted; its trainers are stopped. Run the same command again to continue: finished runs "
               "are skipped, interrupted ones resume from their snapshot.", file=sys.stderr)
         return 130
@@ -260,6 +262,37 @@ def task_verdict(result: dict[str, Any]) -> str:
         return (f"stopped by {signal.Signals(rc - 128).name} at a snapshot; the same sweep command resumes it "
                 f"(log {result['log']})")
     return f"FAILED (exit {rc}, log {result['log']})"
+
+
+def stop_trainers(runs: list[RunSpec]) -> list[int]:
+    """Ask the trainers of ``runs`` running on this machine to stop after the epoch (update) in progress, each with
+    a snapshot (SIGUSR1, `np_sim.stop_request`), and wait until they have; another Ctrl-C stops the wait, and the
+    trainers then die with the sweep's Ray. Returns the process ids asked. Called when the sweep is interrupted:
+    without it the epochs since each run's last periodic snapshot would be lost."""
+    ours = {run.run_dir.resolve() for run in runs}
+    pids = [pid for out, pid in active_trainers().items() if out in ours]
+    for pid in pids:
+        try:
+            os.kill(pid, signal.SIGUSR1)
+        except ProcessLookupError:  # it ended meanwhile
+            pass
+    if pids:
+        print(f"sweep: stopping {len(pids)} trainer(s) after the epoch in progress, each writing its snapshot; "
+              "Ctrl-C again to kill them now", file=sys.stderr, flush=True)
+    try:
+        while any(_alive(pid) for pid in pids):
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        pass
+    return pids
+
+
+def _alive(pid: int) -> bool:
+    """The process exists and is not a zombie."""
+    try:
+        return not Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] == "Z"
+    except OSError:
+        return False
 
 
 def _report_skipped(runs: list[RunSpec], states: list[RunState]) -> None:

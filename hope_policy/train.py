@@ -352,16 +352,17 @@ def train(config: HopeTrainConfig, out: str | Path, resume: bool = False, overwr
             while not trainer.done and (max_updates is None or trainer.updates < max_updates):
                 row = trainer.step()
                 rows.append(row)
+                stopping = stop.requested  # read once: a signal during the writes below waits for the next update
                 write_metrics(metrics_path, rows)
                 _log(writer, row)
                 if trainer.done:
                     save_hope_checkpoint(out / "final.pt", trainer.policy_payload())
                     (out / "snapshot.pt").unlink(missing_ok=True)
-                elif stop.requested or trainer.updates % config.snapshot_every == 0 or trainer.updates == max_updates:
+                elif stopping or trainer.updates % config.snapshot_every == 0 or trainer.updates == max_updates:
                     save_hope_checkpoint(out / "snapshot.pt", trainer.state())
                 bar.update(min(row["episodes"], config.episodes) - bar.n)
                 bar.set_postfix(ret=f"{row['train_return']:.2f}", succ=f"{row['train_success']:.2f}")
-                if stop.requested and not trainer.done:
+                if stopping and not trainer.done:
                     raise TrainingStopped(out, f"update {trainer.updates} ({trainer.episodes} episodes)", stop.signum)
     finally:
         bar.close()

@@ -588,10 +588,11 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
             for _ in bar:
                 row = _train_epoch(trainer)
                 rows.append(row)
-                _write_epoch(trainer, out, rows, writer, trainer.epoch if stop.requested else last)
+                stopping = stop.requested  # read once: a signal during the writes below waits for the next epoch
+                _write_epoch(trainer, out, rows, writer, trainer.epoch if stopping else last)
                 bar.set_postfix(steps_s=f"{row['steps_per_s']:,.0f}", ret=f"{row['train_return']:.0f}",
                                 succ=f"{row['train_success']:.2f}", cur=f"{row['curriculum_fraction']:.2f}")
-                if stop.requested and trainer.epoch < last:
+                if stopping and trainer.epoch < last:
                     raise TrainingStopped(out, f"epoch {trainer.epoch} of {last}", stop.signum)
     finally:
         if writer is not None:

@@ -15,7 +15,8 @@ from pathlib import Path
 import pytest
 
 from experiments import sweep as sweep_module
-from experiments.sweep import main, run_environment, run_gpus, task_verdict, train_argv
+from experiments.sweep import main, run_environment, run_gpus, stop_trainers, task_verdict, train_argv
+from np_policy.checkpoint import load_checkpoint
 from experiments.sweep_plan import (PAPER_PLAN, active_trainers, estimate_hours, expand, format_table, load_plan,
                                     metrics_rows, metrics_values, resolved_config, run_state)
 
@@ -212,6 +213,32 @@ def test_a_run_stopped_by_a_signal_is_reported_as_resumable_not_failed(tmp_path,
     assert main(argv) == 1
     assert "x: training failed (exit 1); end of x.log:\nTraceback" in capsys.readouterr().err
     assert task_verdict(results[0]) == "done" and task_verdict(results[2]) == "FAILED (exit 1, log x.log)"
+
+
+def test_an_interrupted_sweep_stops_its_trainers_after_their_epoch_each_with_a_snapshot(tmp_path, capsys):
+    """What the sweep does on Ctrl-C before its Ray goes down: a trainer of one of its runs, midway between periodic
+    snapshots, gets SIGUSR1 and ends with a snapshot at its last complete epoch; a trainer of another run is left."""
+    recipe = TINY | {"ppo": TINY["ppo"] | {"epochs": 400, "snapshot_every_epochs": 400}}
+    run, other = expand(load_plan(str(_plan(tmp_path, recipe)))[0], [0, 1], tmp_path / "runs", ["main"], tmp_path)[:2]
+    config = tmp_path / "long.json"
+    config.write_text(json.dumps(recipe))
+    logs = [(tmp_path / f"{r.name}.log").open("w") for r in (run, other)]
+    trainers = [subprocess.Popen([sys.executable, "-m", "np_policy.train", "--benchmark", "examples", "--config",
+                                  str(config), "--out", str(r.run_dir)], cwd=REPO, stdout=subprocess.DEVNULL,
+                                 stderr=log) for r, log in zip((run, other), logs)]
+    try:
+        _wait(lambda: all(_rows(r.run_dir) for r in (run, other)), 300, "both trainers' first epoch")
+        assert stop_trainers([run]) == [trainers[0].pid]
+        assert trainers[0].wait(timeout=60) == 128 + signal.SIGUSR1 and trainers[1].poll() is None
+    finally:
+        for trainer, log in zip(trainers, logs):
+            trainer.kill()
+            trainer.wait()
+            log.close()
+    rows = [json.loads(line)["epoch"] for line in _rows(run.run_dir)]
+    assert 0 < rows[-1] < 400 and load_checkpoint(run.run_dir / "snapshot.pt")["epoch"] == rows[-1]
+    assert f"stopped by SIGUSR1 after epoch {rows[-1]} of 400" in (tmp_path / f"{run.name}.log").read_text()
+    assert "sweep: stopping 1 trainer(s) after the epoch in progress" in capsys.readouterr().err
 
 
 def test_paper_plan_recognises_the_shipped_runs():
