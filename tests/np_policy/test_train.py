@@ -431,27 +431,26 @@ def test_a_finished_run_drops_its_snapshot_and_resuming_it_says_it_is_finished(t
 
 
 def test_sigterm_stops_a_run_after_its_epoch_with_a_snapshot_and_the_resume_repeats_the_straight_run(
-        tmp_path, capsys, monkeypatch):
+        finished_run, tmp_path, capsys, monkeypatch):
     """SIGTERM during epoch 1 (snapshots every 2 epochs): the run writes a snapshot at epoch 1, exits with status
-    143 (128 + SIGTERM) and one line saying so; --resume then ends where an uninterrupted run ends, bit for bit."""
-    cfg = tmp_path / "tiny.json"
-    cfg.write_text(json.dumps({k: v for k, v in TINY.items() if k not in ("benchmark", "seed")}))
-    argv = ["--benchmark", "examples", "--config", str(cfg), "--out"]
-    main(argv + [str(tmp_path / "straight")])
+    143 (128 + SIGTERM) and one line saying so; --resume to epoch 2 then gives the uninterrupted two-epoch run's
+    rows and weights (``finished_run``, the same command without the signal), bit for bit."""
+    straight, cfg, _ = finished_run
+    argv = ["--benchmark", "examples", "--config", str(cfg), "--out", str(tmp_path / "run")]
     monkeypatch.setattr(train_module, "_train_epoch",
                         signal_after(train_module._train_epoch, signal.SIGTERM, lambda t: t.epoch == 1))
-    run = tmp_path / "stopped"
+    run = tmp_path / "run"
     handler = signal.getsignal(signal.SIGTERM)
     with pytest.raises(SystemExit) as exit_info:
-        main(argv + [str(run)])
+        main(argv)
     assert exit_info.value.code == 143 and signal.getsignal(signal.SIGTERM) == handler
     err = capsys.readouterr().err
     assert err.strip().splitlines()[-1] == (f"{run}: stopped by SIGTERM after epoch 1 of 4; snapshot.pt written, "
                                             "continue it with --resume")
     assert [r["epoch"] for r in _rows(run)] == [1] and load_checkpoint(run / "snapshot.pt")["epoch"] == 1
-    main(argv + [str(run), "--resume"])
-    assert _rows(run) == _rows(tmp_path / "straight")
-    wa, wb = (load_checkpoint(folder / "best.pt")["model"] for folder in (tmp_path / "straight", run))
+    main(argv + ["--resume", "--epochs", "2"])
+    assert _rows(run) == _rows(straight)
+    wa, wb = (load_checkpoint(folder / "best.pt")["model"] for folder in (straight, run))
     assert all(torch.equal(wa[k], wb[k]) for k in wa)
 
 
