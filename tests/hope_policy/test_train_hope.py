@@ -15,7 +15,7 @@ import pytest
 import torch
 
 from cli_helpers import one_error_line
-from stop_helpers import signal_after
+from stop_helpers import guarded_stop_signals, signal_after
 from hope_policy.checkpoint import load_hope_checkpoint
 from hope_policy.ppo import HopePPOConfig
 from hope_policy.train import HopeTrainConfig, HopeTrainer, main, train
@@ -69,10 +69,12 @@ def test_sigusr1_stops_a_run_after_its_update_with_a_snapshot_and_the_resume_rep
     _, straight_rows = straight_run
     real_step = HopeTrainer.step
     monkeypatch.setattr(HopeTrainer, "step", signal_after(real_step, signal.SIGUSR1, lambda t: t.updates == 1))
-    handler, config = signal.getsignal(signal.SIGUSR1), dataclasses.replace(tiny_config(), snapshot_every=5)
-    with pytest.raises(TrainingStopped, match="stopped by SIGUSR1 after update 1 ") as stopped:
-        train(config, tmp_path, progress=False, max_updates=2)
-    assert stopped.value.exit_status == 128 + signal.SIGUSR1 and signal.getsignal(signal.SIGUSR1) == handler
+    config = dataclasses.replace(tiny_config(), snapshot_every=5)
+    with guarded_stop_signals() as guard:
+        with pytest.raises(TrainingStopped, match="stopped by SIGUSR1 after update 1 ") as stopped:
+            train(config, tmp_path, progress=False, max_updates=2)
+        assert signal.getsignal(signal.SIGUSR1) is guard and not guard.received  # restored; the run caught it
+    assert stopped.value.exit_status == 128 + signal.SIGUSR1
     assert load_hope_checkpoint(tmp_path / "snapshot.pt")["updates"] == 1 and len(json_rows(tmp_path)) == 1
     monkeypatch.setattr(HopeTrainer, "step", real_step)
     rows = train(config, tmp_path, resume=True, progress=False, max_updates=2)

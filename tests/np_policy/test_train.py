@@ -17,7 +17,7 @@ from np_policy.checkpoint import main as checkpoint_main
 from np_policy import train as train_module
 from np_policy.train import TrainConfig, Trainer, benchmark_defaults, main, train
 from np_sim.errors import ConfigError
-from stop_helpers import signal_after
+from stop_helpers import guarded_stop_signals, signal_after
 
 TINY = {"benchmark": "examples", "seed": 3, "curriculum_pool": 32,
         "ppo": {"num_train_envs": 16, "num_test_envs": 4, "selection_episodes": 8, "steps_per_collect": 256,
@@ -440,10 +440,11 @@ def test_sigterm_stops_a_run_after_its_epoch_with_a_snapshot_and_the_resume_repe
     monkeypatch.setattr(train_module, "_train_epoch",
                         signal_after(train_module._train_epoch, signal.SIGTERM, lambda t: t.epoch == 1))
     run = tmp_path / "run"
-    handler = signal.getsignal(signal.SIGTERM)
-    with pytest.raises(SystemExit) as exit_info:
-        main(argv)
-    assert exit_info.value.code == 143 and signal.getsignal(signal.SIGTERM) == handler
+    with guarded_stop_signals() as guard:
+        with pytest.raises(SystemExit) as exit_info:
+            main(argv)
+        assert signal.getsignal(signal.SIGTERM) is guard and not guard.received  # restored; the run caught it
+    assert exit_info.value.code == 143
     err = capsys.readouterr().err
     assert err.strip().splitlines()[-1] == (f"{run}: stopped by SIGTERM after epoch 1 of 4; snapshot.pt written, "
                                             "continue it with --resume")

@@ -8,17 +8,18 @@ import threading
 import pytest
 
 from np_sim.stop_request import STOP_SIGNALS, STOPPED_EXIT_STATUSES, StopRequest, TrainingStopped
+from stop_helpers import guarded_stop_signals
 
 
 @pytest.mark.parametrize("signum", STOP_SIGNALS)
 def test_a_stop_signal_is_recorded_and_the_next_one_gets_the_default_action(signum):
-    previous = {s: signal.getsignal(s) for s in STOP_SIGNALS}
-    with StopRequest() as stop:
-        assert not stop.requested
-        os.kill(os.getpid(), signum)  # the handler runs before os.kill returns to this frame's next bytecode
-        assert stop.requested and stop.signum == signum
-        assert all(signal.getsignal(s) == signal.SIG_DFL for s in STOP_SIGNALS)
-    assert {s: signal.getsignal(s) for s in STOP_SIGNALS} == previous
+    with guarded_stop_signals() as guard:  # the previous handler, which must come back
+        with StopRequest() as stop:
+            assert not stop.requested
+            os.kill(os.getpid(), signum)  # the handler runs before os.kill returns to this frame's next bytecode
+            assert stop.requested and stop.signum == signum
+            assert all(signal.getsignal(s) == signal.SIG_DFL for s in STOP_SIGNALS)
+        assert all(signal.getsignal(s) is guard for s in STOP_SIGNALS) and not guard.received
 
 
 def test_outside_the_main_thread_it_changes_no_handler():
