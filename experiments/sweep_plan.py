@@ -393,14 +393,25 @@ def measured_epoch_s(path: Path) -> float | None:
     return float(np.median(times)) if len(times) >= MEASURED_EPOCHS else None
 
 
-def estimate_hours(run: RunSpec, state: RunState) -> float | None:
+def configuration_epoch_s(runs: list[RunSpec]) -> dict[str, float]:
+    """{configuration name: median ``epoch_s`` over the timed rows of all its runs in ``runs``}, for the
+    configurations with at least `MEASURED_EPOCHS` such rows: what its other seeds took, on the machines that
+    trained them."""
+    times: dict[str, list[float]] = {}
+    for run in runs:
+        times.setdefault(run.config.name, []).extend(metrics_values(run.run_dir / "metrics.jsonl", "epoch_s"))
+    return {name: float(np.median(t)) for name, t in times.items() if len(t) >= MEASURED_EPOCHS}
+
+
+def estimate_hours(run: RunSpec, state: RunState, measured: dict[str, float] | None = None) -> float | None:
     """Estimated wall-clock hours left on this 2-core machine (None when unknown): an interrupted or running run
-    at the median of its own timed epochs (`measured_epoch_s`), any other at its configuration's ``epoch_s``."""
+    at the median of its own timed epochs (`measured_epoch_s`), any other at its configuration's median in
+    ``measured`` (`configuration_epoch_s`: its other seeds) or, without one, at the plan's ``epoch_s``."""
     left = epochs_left(run, state)
     if left is None:
         return None
     own = measured_epoch_s(run.run_dir / "metrics.jsonl") if state.kind in ("interrupted", "training now") else None
-    return left * (own or run.config.epoch_s) / 3600
+    return left * (own or (measured or {}).get(run.config.name) or run.config.epoch_s) / 3600
 
 
 def describe(state: RunState, unit: str = "epoch") -> str:
@@ -419,20 +430,22 @@ def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
     stop the runs training now without losing their epochs (`np_sim.stop_request`)."""
     lines = [f"{'run':<38} {'tables':<34} {'est. h left':>11}  state"]
     total = 0.0
+    measured = configuration_epoch_s(runs)
     for run, state in zip(runs, states):
-        hours = estimate_hours(run, state)
+        hours = estimate_hours(run, state, measured)
         total += hours or 0.0
         shown = "?" if hours is None else f"{hours:.1f}"
         lines.append(f"{run.name:<38} {','.join(run.config.tables):<34} {shown:>11}  "
                      f"{describe(state, TRAINERS[run.config.trainer][0].rstrip('s'))}")
     unknown = sum(estimate_hours(r, s) is None for r, s in zip(runs, states))
-    lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine (an estimate: on one thread beside "
-                 f"another run, {FACTORIAL_EPOCH_S} s per Factorial epoch, {min(TOPOLOGY_NP_EPOCH_S.values())}–"
+    lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine (an estimate, each run on one thread "
+                 "beside another: an interrupted run at the median of its own timed epochs, a run not started at the "
+                 "median of its configuration's other seeds listed here, else at the plan's figure: "
+                 f"{FACTORIAL_EPOCH_S} s per Factorial epoch, {min(TOPOLOGY_NP_EPOCH_S.values())}–"
                  f"{max(TOPOLOGY_NP_EPOCH_S.values())} s per NeuralParker Topology-Stress epoch, {SITE_EPOCH_S} s "
                  f"per site epoch, {HOPE_EPISODE_S} s per adapted-HOPE episode, "
                  f"{min(HOPE_BACKBONE_EPISODE_S.values())}–{max(HOPE_BACKBONE_EPISODE_S.values())} s per HOPE-style "
-                 "backbone episode; an interrupted run at the median of its own timed epochs)"
-                 + (f", not counting {unknown} run(s) not available yet" if unknown else ""))
+                 "backbone episode)" + (f", not counting {unknown} run(s) not available yet" if unknown else ""))
     training = [s.detail.removeprefix("pid ") for s in states if s.kind == "training now"]
     if training:
         lines.append("to stop the runs training now after the epoch (update) in progress, with a snapshot the sweep "

@@ -17,8 +17,9 @@ import pytest
 from experiments import sweep as sweep_module
 from experiments.sweep import main, run_environment, run_gpus, stop_trainers, task_verdict, train_argv
 from np_policy.checkpoint import load_checkpoint
-from experiments.sweep_plan import (PAPER_PLAN, active_trainers, estimate_hours, expand, format_table, load_plan,
-                                    metrics_rows, metrics_values, resolved_config, run_state)
+from experiments.sweep_plan import (PAPER_PLAN, active_trainers, configuration_epoch_s, estimate_hours, expand,
+                                    format_table, load_plan, metrics_rows, metrics_values, resolved_config,
+                                    run_state)
 
 pytestmark = pytest.mark.sweep
 REPO = Path(__file__).resolve().parents[2]
@@ -95,15 +96,21 @@ def test_metrics_rows_keep_complete_objects_and_skip_torn_or_foreign_lines(tmp_p
     assert metrics_values(path, "epoch_s") == [80.5]
 
 
-def test_an_interrupted_run_is_estimated_at_its_own_median_epoch_time(tmp_path):
+def test_an_interrupted_run_is_estimated_at_its_own_median_epoch_time_and_a_new_one_at_its_siblings(tmp_path):
     recipe = TINY | {"ppo": TINY["ppo"] | {"epochs": 10, "snapshot_every_epochs": 2}}
-    run = expand(load_plan(str(_plan(tmp_path, recipe, epoch_s=3600.0)))[0], [1], tmp_path / "runs", ["main"],
-                 tmp_path)[0]
+    run, new = expand(load_plan(str(_plan(tmp_path, recipe, epoch_s=3600.0)))[0], [1, 2], tmp_path / "runs",
+                      ["main"], tmp_path)[:2]
     _fake_run(run.run_dir, 4)
+    assert configuration_epoch_s([run, new]) == {}          # no timed rows yet
     assert estimate_hours(run, run_state(run)) == 6.0      # four rows without epoch_s: the plan's hour per epoch
     rows = [{"epoch": e, "epoch_s": t} for e, t in enumerate([1800, 1800, 900, 1800, 7200, 1800], start=1)]
     (run.run_dir / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
     assert estimate_hours(run, run_state(run)) == 4 * 0.5  # 10 - 6 epochs left at the median 1,800 s
+    measured = configuration_epoch_s([run, new])
+    assert measured == {"a": 1800.0}
+    assert estimate_hours(new, run_state(new)) == 10.0 and estimate_hours(new, run_state(new), measured) == 5.0
+    (run.run_dir / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows[:4]))
+    assert configuration_epoch_s([run, new]) == {}          # four timed rows are too few to stand for a machine
 
 
 def test_the_dry_run_says_how_to_stop_the_runs_training_now_without_losing_epochs(tmp_path):
