@@ -280,19 +280,11 @@ def stop_trainers(runs: list[RunSpec]) -> list[int]:
         print(f"sweep: stopping {len(pids)} trainer(s) after the epoch in progress, each writing its snapshot; "
               "Ctrl-C again to kill them now", file=sys.stderr, flush=True)
     try:
-        while any(_alive(pid) for pid in pids):
+        while set(pids) & set(active_trainers().values()):  # an ended trainer (a zombie too) has no command line
             time.sleep(0.5)
     except KeyboardInterrupt:
         pass
     return pids
-
-
-def _alive(pid: int) -> bool:
-    """The process exists and is not a zombie."""
-    try:
-        return not Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] == "Z"
-    except OSError:
-        return False
 
 
 def _report_skipped(runs: list[RunSpec], states: list[RunState]) -> None:

@@ -429,15 +429,14 @@ def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
     """The dry-run listing: one line per run with its state and estimated hours left, then the total, then how to
     stop the runs training now without losing their epochs (`np_sim.stop_request`)."""
     lines = [f"{'run':<38} {'tables':<34} {'est. h left':>11}  state"]
-    total = 0.0
     measured = configuration_epoch_s(runs)
-    for run, state in zip(runs, states):
-        hours = estimate_hours(run, state, measured)
-        total += hours or 0.0
-        shown = "?" if hours is None else f"{hours:.1f}"
+    hours = [estimate_hours(run, state, measured) for run, state in zip(runs, states)]
+    for run, state, left in zip(runs, states, hours):
+        shown = "?" if left is None else f"{left:.1f}"
         lines.append(f"{run.name:<38} {','.join(run.config.tables):<34} {shown:>11}  "
                      f"{describe(state, TRAINERS[run.config.trainer][0].rstrip('s'))}")
-    unknown = sum(estimate_hours(r, s) is None for r, s in zip(runs, states))
+    total = sum(h for h in hours if h is not None)
+    unknown = hours.count(None)
     lines.append(f"estimated compute left: {total:.1f} h on this 2-core machine (an estimate, each run on one thread "
                  "beside another: an interrupted run at the median of its own timed epochs, a run not started at the "
                  "median of its configuration's other seeds listed here, else at the plan's figure: "

@@ -29,7 +29,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -441,8 +440,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     try:
         rows = train(config, out, resume=args.resume, overwrite=args.overwrite)
     except TrainingStopped as stopped:
-        print(stopped, file=sys.stderr)
-        raise SystemExit(stopped.exit_status) from None
+        stopped.exit()
     print(f"{out}: finished after {len(rows)} updates, {rows[-1]['episodes'] if rows else 0} episodes "
           "(metrics.jsonl, final.pt; no snapshot)")
     return rows

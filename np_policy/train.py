@@ -675,8 +675,7 @@ def main(argv=None) -> list[dict[str, Any]]:
     except NPSimError as exc:  # the project's own errors (checkpoint, config, scene) are the user's to fix
         raise _fail(str(exc)) from None
     except TrainingStopped as stopped:
-        print(stopped, file=sys.stderr)
-        raise SystemExit(stopped.exit_status) from None
+        stopped.exit()
     total = config.ppo.epochs
     if rows and rows[-1]["epoch"] == total:
         print(f"{out}: finished at epoch {total} of {total} (metrics.jsonl, curves.png, best.pt; no snapshot)")

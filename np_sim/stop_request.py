@@ -11,9 +11,11 @@ trainer then exits with status 128 + the signal's number (the shell's code for a
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 from pathlib import Path
 from types import FrameType
+from typing import NoReturn
 
 STOP_SIGNALS = (signal.SIGTERM, signal.SIGUSR1)
 """Signals that ask a run to stop at its next snapshot point."""
@@ -34,6 +36,11 @@ class TrainingStopped(Exception):
     def exit_status(self) -> int:
         """128 + the signal's number."""
         return 128 + self.signum
+
+    def exit(self) -> NoReturn:
+        """A trainer CLI's ending after the stop: this message on stderr, then SystemExit with `exit_status`."""
+        print(self, file=sys.stderr)
+        raise SystemExit(self.exit_status) from None
 
 
 class StopRequest:
