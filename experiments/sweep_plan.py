@@ -202,6 +202,8 @@ class RunState:
     epoch: int = 0
     """Last complete epoch in metrics.jsonl."""
     detail: str = ""
+    pid: int | None = None
+    """The trainer's process id while the run is "training now"."""
 
 
 def read_overrides(path: Path) -> dict[str, Any]:
@@ -350,7 +352,7 @@ def run_state(run: RunSpec, active: dict[Path, int] | None = None) -> RunState:
     epoch = metrics_epoch(run.run_dir / "metrics.jsonl", TRAINERS[run.config.trainer][0])
     pid = (active or {}).get(run.run_dir.resolve())
     if pid is not None:
-        return RunState("training now", epoch, f"pid {pid}")
+        return RunState("training now", epoch, f"pid {pid}", pid)
     conflicts = config_conflicts(run)
     if conflicts:
         return RunState("config differs", epoch, "; ".join(conflicts))
@@ -445,7 +447,7 @@ def format_table(runs: list[RunSpec], states: list[RunState]) -> str:
                  f"per site epoch, {HOPE_EPISODE_S} s per adapted-HOPE episode, "
                  f"{min(HOPE_BACKBONE_EPISODE_S.values())}–{max(HOPE_BACKBONE_EPISODE_S.values())} s per HOPE-style "
                  "backbone episode)" + (f", not counting {unknown} run(s) not available yet" if unknown else ""))
-    training = [s.detail.removeprefix("pid ") for s in states if s.kind == "training now"]
+    training = [str(s.pid) for s in states if s.pid is not None]
     if training:
         lines.append("to stop the runs training now after the epoch (update) in progress, with a snapshot the sweep "
                      f"resumes: kill -USR1 {' '.join(training)}")

@@ -119,7 +119,7 @@ def test_the_dry_run_says_how_to_stop_the_runs_training_now_without_losing_epoch
     idle = format_table([run], [run_state(run)]).splitlines()
     assert idle[-1].startswith("estimated compute left")
     state = run_state(run, {run.run_dir.resolve(): 4321})
-    assert (state.kind, state.detail) == ("training now", "pid 4321")
+    assert (state.kind, state.detail, state.pid) == ("training now", "pid 4321", 4321)
     assert format_table([run], [state]).splitlines()[-1] == (
         "to stop the runs training now after the epoch (update) in progress, with a snapshot the sweep resumes: "
         "kill -USR1 4321")
