@@ -28,7 +28,7 @@ from tracking.executor import execute
 from tracking.world import build_world
 
 GOAL_REALTIME = 50.0
-"""Unrendered real-time factor the closed loop must reach for one vehicle (issue 7)."""
+"""Unrendered real-time factor the closed loop must reach for one vehicle."""
 
 _ARCS = np.array([[0.2, 6.0], [0.0, 3.0], [-0.4, -5.0], [0.0, -2.0]])
 """The benchmark manoeuvre (κ, l)."""

@@ -7,7 +7,7 @@
 * the OMPL peer (RRT*, same time budget) and Hybrid A* on the same seeded subset of M starts: success and tree
   vertices.
 
-Targets from issue 6 are printed beside the figures: Hybrid A* success ≥ 0.95 on the Factorial starts
+Targets are printed beside the figures: Hybrid A* success ≥ 0.95 on the Factorial starts
 (reference-point convention) and median plan time ≤ 20 ms (the paper's C++ reports 5.26 ms on its site clips).
 NP-Guided A* needs the policy (torch), which ``np_sim`` never imports: its time ratio to Hybrid A* is printed by
 ``python -m experiments.planners``.

@@ -187,10 +187,10 @@ class HybridAStar:
             geo = packed_scene(scene).geometry
             b = np.asarray(scene.boundary, float)
             lo, hi = b.min(axis=0), b.max(axis=0)
-            # lattice: int64 stamp, float64 g, int64 closed per (x, y, θ) cell; heuristic grid: 145 B per cell
+            # lattice: int64 stamp, float64 g, int64 closed per (x, y, θ) cell; heuristic grid: 147 B per cell
             cells = [int(extent / c.xy_resolution_m) + 1 for extent in hi - lo]
             grid_cells = [int(extent / c.grid_cell_m) + 1 for extent in hi - lo]
-            need = 24 * cells[0] * cells[1] * c.heading_bins + 145 * grid_cells[0] * grid_cells[1]
+            need = 24 * cells[0] * cells[1] * c.heading_bins + 147 * grid_cells[0] * grid_cells[1]
             if need > c.max_lattice_bytes:
                 raise CapacityError(
                     f"{scene.name or '<scene>'}: boundary: a {hi[0] - lo[0]:g} x {hi[1] - lo[1]:g} m extent needs "
@@ -251,7 +251,7 @@ class HybridAStar:
             status, node = sk.expand(maps.geometry, footprint, self._local, goal, self._prims, self._costs,
                                      c.vehicle.kappa_max, c.samples_per_arc, c.goal_tolerance_m,
                                      math.radians(c.goal_tolerance_deg), region_m, maps.lattice, maps.n_lattice,
-                                     grid.distance, grid.origin, grid.cell_m, guide, c.guide_weight, c.guide_cap_m,
+                                     grid.state, grid.origin, grid.cell_m, guide, c.guide_weight, c.guide_cap_m,
                                      c.analytic_every,
                                      c.analytic_near_m, node_pose, node_g, node_parent, node_arc, node_cell,
                                      node_exact, cell_stamp, cell_g, closed_stamp, heap_keys, heap_ids, state,

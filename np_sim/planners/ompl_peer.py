@@ -1,4 +1,4 @@
-"""The off-the-shelf peer: OMPL's RRT* in a Reeds–Shepp state space with our collision check (issue 6, spec §7).
+"""The off-the-shelf peer: OMPL's RRT* in a Reeds–Shepp state space with our collision check (spec §7).
 
 OMPL (PyPI ``ompl``, a test extra, imported on first use) plans in ``ReedsSheppStateSpace(1/κ_max)`` bounded by
 the scene's bounding box; our compiled check (``np_sim.kernels.collision.pose_valid``, reference-point or

@@ -35,6 +35,7 @@ from np_sim.kernels.kinematics import arc_point, wrap_angle
 from np_sim.kernels.reeds_shepp import rs_arcs_into, rs_length
 from np_sim.kernels.swept import EXACT_TOLERANCE_M, swept_arc_contact
 from np_sim.planners.heap import heap_pop, heap_push
+from np_sim.planners.heuristic import grid_distance
 
 # status codes returned by ``expand``
 FOUND = 0
@@ -82,14 +83,15 @@ def polyline_distance(px: float, py: float, guide: np.ndarray) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def grid_lookup(hgrid: np.ndarray, origin_x: float, origin_y: float, cell_m: float, x: float, y: float) -> float:
-    """Holonomic distance of the grid cell holding (x, y), less one cell diagonal (so it never overestimates
-    the distance between the point and the goal by discretisation); inf outside the grid."""
+def grid_lookup(hgrid, origin_x: float, origin_y: float, cell_m: float, x: float, y: float) -> float:
+    """Holonomic distance of the grid cell holding (x, y) (``hgrid``: the lazy Dijkstra state of
+    ``np_sim.planners.heuristic.lazy_grid``), less one cell diagonal (so it never overestimates the distance between
+    the point and the goal by discretisation); inf outside the grid."""
     col = int(math.floor((x - origin_x) / cell_m + 0.5))
     row = int(math.floor((y - origin_y) / cell_m + 0.5))
-    if row < 0 or row >= hgrid.shape[0] or col < 0 or col >= hgrid.shape[1]:
+    if row < 0 or row >= hgrid[0].shape[0] or col < 0 or col >= hgrid[0].shape[1]:
         return math.inf
-    return max(0.0, hgrid[row, col] - math.sqrt(2.0) * cell_m)
+    return max(0.0, grid_distance(hgrid, cell_m, row, col) - math.sqrt(2.0) * cell_m)
 
 
 @njit(cache=True, error_model="numpy")
@@ -106,7 +108,7 @@ def lattice_cell(x: float, y: float, th: float, origin_x: float, origin_y: float
 
 @njit(cache=True, error_model="numpy")
 def heuristic(x: float, y: float, th: float, gx: float, gy: float, gth: float, kappa_max: float, region_m: float,
-              hgrid: np.ndarray, h_origin_x: float, h_origin_y: float, h_cell_m: float) -> float:
+              hgrid, h_origin_x: float, h_origin_y: float, h_cell_m: float) -> float:
     """h of a node: max(Reeds–Shepp length, holonomic grid distance) to the goal pose; for a region goal (radius
     ``region_m`` > 0) the grid distance less the radius."""
     hol = grid_lookup(hgrid, h_origin_x, h_origin_y, h_cell_m, x, y)
@@ -116,7 +118,7 @@ def heuristic(x: float, y: float, th: float, gx: float, gy: float, gth: float, k
 
 
 @njit(cache=True, error_model="numpy")
-def heuristic_bound(x: float, y: float, region_m: float, hgrid: np.ndarray, h_origin_x: float, h_origin_y: float,
+def heuristic_bound(x: float, y: float, region_m: float, hgrid, h_origin_x: float, h_origin_y: float,
                     h_cell_m: float) -> float:
     """A lower bound of ``heuristic`` that needs no Reeds–Shepp length: its grid term (all of it for a region
     goal)."""
@@ -204,7 +206,7 @@ def store_node(k: int, x: float, y: float, th: float, g: float, parent: int, kap
 def push_successors(i: int, geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.ndarray,
                     costs: np.ndarray, kappa_max: float, n_samples: int, region_m: float,
                     lattice: np.ndarray, n_lattice: np.ndarray,
-                    hgrid: np.ndarray, h_origin: np.ndarray, h_cell_m: float,
+                    hgrid, h_origin: np.ndarray, h_cell_m: float,
                     use_guide: bool, guide: np.ndarray, guide_weight: float, guide_cap_m: float,
                     node_pose: np.ndarray, node_g: np.ndarray, node_parent: np.ndarray, node_arc: np.ndarray,
                     node_cell: np.ndarray, node_exact: np.ndarray, cell_stamp: np.ndarray, cell_g: np.ndarray,
@@ -247,7 +249,7 @@ def push_successors(i: int, geo, footprint: bool, local: np.ndarray, goal: np.nd
 def expand(geo, footprint: bool, local: np.ndarray, goal: np.ndarray, prims: np.ndarray, costs: np.ndarray,
            kappa_max: float, n_samples: int, tol_m: float, tol_rad: float, region_m: float,
            lattice: np.ndarray, n_lattice: np.ndarray,
-           hgrid: np.ndarray, h_origin: np.ndarray, h_cell_m: float,
+           hgrid, h_origin: np.ndarray, h_cell_m: float,
            guide: np.ndarray, guide_weight: float, guide_cap_m: float, analytic_every: int, analytic_near_m: float,
            node_pose: np.ndarray, node_g: np.ndarray, node_parent: np.ndarray, node_arc: np.ndarray,
            node_cell: np.ndarray, node_exact: np.ndarray, cell_stamp: np.ndarray, cell_g: np.ndarray,

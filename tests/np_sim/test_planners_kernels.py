@@ -1,5 +1,6 @@
 """Compiled pieces of the planners against slow exact versions on seeded random inputs: the heap (vs heapq), the
-guide distance (vs shapely), the holonomic grid Dijkstra (vs a plain-Python Dijkstra with the same step rules),
+guide distance (vs shapely), the holonomic grid Dijkstra (vs a plain-Python Dijkstra with the same step rules; its
+lazy form vs the run to the end),
 the free cells from a kept boundary mask (vs every cell's ``point_valid``) and the lattice binning (vs its
 formula), and the open list's lower-bound key (vs the full heuristic)."""
 
@@ -17,7 +18,8 @@ from clip_frames import first_frame  # tests/clip_frames.py
 from np_sim.benchmarks import load_benchmark
 from np_sim.planners.heap import heap_pop, heap_push
 from np_sim.kernels.collision import point_valid
-from np_sim.planners.heuristic import boundary_cells, free_cells_inside, grid_dijkstra, holonomic_grid
+from np_sim.planners.heuristic import (boundary_cells, free_cells_inside, grid_dijkstra, grid_distance, holonomic_grid,
+                                      lazy_grid)
 from np_sim.planners.search_kernels import heuristic, heuristic_bound, lattice_cell, polyline_distance
 from np_sim.scene_arrays import packed_scene
 
@@ -93,6 +95,30 @@ def test_grid_dijkstra_matches_slow_version(seed):
     np.testing.assert_allclose(got[np.isfinite(want)], want[np.isfinite(want)], rtol=0, atol=1e-9)
 
 
+def test_the_lazy_dijkstra_answers_any_query_order_as_the_full_run_and_settles_only_what_it_needs():
+    """Cells asked in a random order (each twice) get the full run's distances bit for bit; on a site frame, the
+    cells around a start 8 m from the goal are answered with a part of the grid settled."""
+    rng = np.random.default_rng(7)
+    free = rng.random((17, 23)) > 0.3
+    full = grid_dijkstra(free, 4, 5, 0.5)
+    state = lazy_grid(free, 4, 5)
+    cells = [(int(r), int(c)) for r, c in zip(rng.integers(0, 17, 200), rng.integers(0, 23, 200))]
+    for r, c in cells + cells[::-1]:
+        assert grid_distance(state, 0.5, r, c) == full[r, c] or (math.isinf(full[r, c]) and
+                                                                 math.isinf(grid_distance(state, 0.5, r, c)))
+    scene = first_frame(10)[0]
+    goal = np.asarray(scene.target, float)
+    grid = holonomic_grid(packed_scene(scene).geometry, np.asarray(scene.boundary, float), goal[:2], 0.25)
+    row, col = (int(math.floor((goal[1] - grid.origin[1]) / 0.25 + 0.5)) + 32,
+                int(math.floor((goal[0] - grid.origin[0]) / 0.25 + 0.5)))
+    asked = [(row + dr, col + dc) for dr in range(-4, 5) for dc in range(-4, 5)]
+    lazy = [grid_distance(grid.state, 0.25, r, c) for r, c in asked]
+    settled = np.mean(grid.state[3] & 1 > 0)
+    whole = grid_dijkstra(grid.state[0], *np.argwhere(grid.state[1] == 0.0)[0], 0.25)
+    assert lazy == [whole[r, c] for r, c in asked] and all(math.isfinite(d) for d in lazy)
+    assert 0 < settled < 0.5
+
+
 def test_lattice_cell_bins_position_and_heading():
     rng = np.random.default_rng(2)
     nx, ny, nth, res = 40, 30, 72, 0.5
@@ -118,8 +144,9 @@ def test_free_cells_from_a_kept_boundary_mask_are_every_cells_point_test():
     """On benchmark scenes and a site frame (sharing its boundary with the other frames of the site): the boundary
     mask kept per boundary and grid, with the obstacles tested per call, gives exactly ``free_cells`` (every cell's
     ``point_valid``); the same boundary and grid reuse one mask."""
-    scenes = [*load_benchmark("factorial", "test")[:3], *load_benchmark("topology", "test")[:3], first_frame(10)[0],
+    scenes = [*load_benchmark("factorial", "test"), *load_benchmark("topology", "test"), first_frame(10)[0],
               first_frame(24)[0]]
+    assert sum(packed_scene(scene).geometry[7][0] for scene in scenes) > 0  # discs as well as polygons
     for scene in scenes:
         geo = packed_scene(scene).geometry
         b = np.asarray(scene.boundary, float)
@@ -148,7 +175,7 @@ def test_the_open_lists_key_never_exceeds_the_full_heuristic():
     equal = 0
     for x, y, th in zip(rng.uniform(lo[0], hi[0], 400), rng.uniform(lo[1], hi[1], 400), rng.uniform(-4, 4, 400)):
         for region in (0.0, 3.0):
-            args = (grid.distance, grid.origin[0], grid.origin[1], grid.cell_m)
+            args = (grid.state, grid.origin[0], grid.origin[1], grid.cell_m)
             bound = heuristic_bound(x, y, region, *args)
             full = heuristic(x, y, th, goal[0], goal[1], goal[2], 0.68, region, *args)
             assert bound <= full or (math.isinf(bound) and math.isinf(full))

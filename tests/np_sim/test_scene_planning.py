@@ -90,8 +90,9 @@ def test_a_huge_lot_is_refused_before_any_allocation():
 
 def test_the_memory_bound_is_the_lattice_and_grid_size():
     # 100 × 50 m: lattice 201 × 101 cells × 72 headings × 24 B (int64 stamp, float64 g, int64 closed) and
-    # heuristic grid 401 × 201 cells × 145 B (bool free, float64 distance and copy, 8 float64 keys, 8 int64 ids)
-    need = 201 * 101 * 72 * 24 + 401 * 201 * 145
+    # heuristic grid 401 × 201 cells × 147 B (bool inside and free, int8 status, float64 distance and value,
+    # 8 float64 keys, 8 int64 ids)
+    need = 201 * 101 * 72 * 24 + 401 * 201 * 147
     scene = _box_scene(100.0, 50.0)
     plan = HybridAStar(HybridAStarConfig(max_lattice_bytes=need)).plan(scene, [5.0, 5.0, 0.0])
     assert plan.success
