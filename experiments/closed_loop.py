@@ -66,7 +66,7 @@ from np_policy.config import NeuralParkerConfig
 from np_sim.cli import cli_boundary, fresh_folder, positive_int, vehicle_spec
 from np_sim.errors import ConfigError
 from np_sim.plan import PLAN_STAGES
-from np_sim.provenance import git_state
+from np_sim.provenance import provenance
 from tracking.clip_run import ClipRunConfig
 from tracking.rerun_log import merge_recordings
 
@@ -385,7 +385,7 @@ def run(config: ClosedLoopConfig | None = None, out: Path | None = None, rrd: bo
     phases = {"setup": wall0 - start, "drive": wall, "outputs": time.perf_counter() - wall0 - wall}
     (folder / "config.json").write_text(json.dumps(
         {"config": dataclasses.asdict(config), "planners": names, "clips": [clips[k].name for k in indices],
-         "wall_time_s": wall, "phase_times_s": phases, **git_state()}, indent=2, default=str))
+         "wall_time_s": wall, "phase_times_s": phases, **provenance()}, indent=2, default=str))
     return {"records": records, "table": table, "folder": folder, "figure": figure, "rrd": merged,
             "wall_time_s": wall, "phase_times_s": phases, "config": config}
 

@@ -28,7 +28,7 @@ from experiments.paper import (ARMS, HOPE_ACTION, SEEDS, ArmResult, bar_figure, 
 from experiments.paper_numbers import METRICS, PaperTable
 from experiments.sweep_plan import PAPER_PLAN, active_trainers, expand
 from np_sim.cli import cli_boundary, fresh_folder
-from np_sim.provenance import git_state
+from np_sim.provenance import provenance
 
 HOW = __doc__[__doc__.index("Each reads"):]
 """What every table module does, for its ``--help``."""
@@ -71,7 +71,7 @@ def run(paper: PaperTable, experiment: str, runs_root: Path = Path("checkpoints/
         "table": paper.label, "runs": str(runs_root), "evaluate": evaluate, "hope_action": HOPE_ACTION,
         "rows": {r.arm.label: {"configuration": r.arm.configuration, "evaluation": r.arm.evaluation,
                                "seeds": r.seeds_text()} for r in results},
-        **git_state()}, indent=2))
+        **provenance()}, indent=2))
     return {"results": results, "table": table, "folder": folder}
 
 

@@ -21,7 +21,7 @@ from typing import Any, Callable
 from experiments.common import run_folder, write_records
 from np_sim.cli import folder_problem
 from np_sim.errors import ConfigError
-from np_sim.provenance import git_state
+from np_sim.provenance import provenance
 
 PROGRESS_FILE = "progress.jsonl"
 SETTINGS_FILE = "progress_settings.json"
@@ -96,10 +96,10 @@ class EpisodeProgress:
 
     def write_results(self, records: list[dict[str, Any]], table: str, config: dict[str, Any]) -> None:
         """The finished run's files — ``records.csv``/``.json``, ``table.md``, and ``config.json`` holding ``config``
-        and the code that made them (`git_state`) — then the progress files are removed."""
+        and the code and machine that made them (`provenance`) — then the progress files are removed."""
         write_records(self.folder, records)
         (self.folder / "table.md").write_text(table + "\n")
-        (self.folder / "config.json").write_text(json.dumps({**config, **git_state()}, indent=2, default=str))
+        (self.folder / "config.json").write_text(json.dumps({**config, **provenance()}, indent=2, default=str))
         self.finish()
 
     def finish(self) -> None:

@@ -61,7 +61,7 @@ from experiments.scene_files import scene_file
 from experiments.track import PLANNERS as TRACK_PLANNERS
 from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int, vehicle_spec
 from np_sim.errors import ConfigError
-from np_sim.provenance import git_state
+from np_sim.provenance import provenance
 from np_sim.vehicle import VehicleSpec
 from tracking.controllers import CONTROLLERS
 from tracking.disturbance import FACTORS, LEVELS
@@ -396,7 +396,7 @@ def main(argv=None) -> dict[str, Any]:
         (folder / "config.json").write_text(json.dumps(
             {"argv": _study_argv(argv), "config": dataclasses.asdict(spec), "planners": names,
              "factors": args.factors, "levels": args.levels, "seed": args.seed, f"{source.noun}s": source.units,
-             **git_state()}, indent=2, default=str))
+             **provenance()}, indent=2, default=str))
     start = time.perf_counter()
     run_jobs(jobs, names, spec, args.seed, log, args.workers or default_workers(), args.ray_address)
     rows = log.rows()

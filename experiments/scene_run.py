@@ -37,7 +37,7 @@ from np_sim.collision import path_valid
 from np_sim.errors import CapacityError, ConfigError, SceneError, StartInCollisionError
 from np_sim.plan import Plan
 from np_sim.plotting import plot_scene, target_marker
-from np_sim.provenance import git_state
+from np_sim.provenance import provenance
 from np_sim.scene import Scene
 from np_sim.scene_starts import draw_starts
 from np_sim.vehicle import VehicleSpec
@@ -178,7 +178,7 @@ def run_scene(path: Path, start=None, planners: list[str] | None = None,
          "planners": list(built), "skipped": skipped, "checkpoint": str(checkpoint),
          "footprint_checkpoint": str(footprint_checkpoint), "hope_checkpoint": str(hope_checkpoint),
          "convention": convention, "vehicle": vehicle.to_dict(), "controller": controller, "render": render,
-         **git_state()}, indent=2))
+         **provenance()}, indent=2))
     return {"records": records, "table": table, "start": pose, "folder": folder}
 
 

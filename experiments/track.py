@@ -41,7 +41,7 @@ from experiments.scene_files import (add_scene_arguments, describe, episode_scen
                                      starts_summary)
 from np_sim.cli import cli_boundary, existing_file, fresh_folder, non_negative_int, positive_int, vehicle_spec
 from np_sim.errors import ConfigError
-from np_sim.provenance import git_state
+from np_sim.provenance import provenance
 from np_sim.vehicle import VehicleSpec
 from tracking.config import TrackerConfig
 from tracking.controllers import CONTROLLERS
@@ -101,7 +101,7 @@ def track(benchmark: str = "factorial", planner: str = "hybrid_astar", controlle
          "checkpoint": str(checkpoint),
          "controllers": list(controllers), "episodes": len(episodes), "per_scene": per_scene, "limit": limit,
          "rrd_episodes": rrd_episodes,
-         "render": render, **git_state()}, indent=2))
+         "render": render, **provenance()}, indent=2))
     return {"records": records, "table": table, "folder": folder, "starts": starts_summary(files)}
 
 

@@ -1,12 +1,15 @@
-"""Which code made a result: the git commit of this checkout and the Python files edited since it; for a long run
-that is resumed, one line per start (``provenance.jsonl``)."""
+"""Which code and machine made a result: the git commit of this checkout, the Python files edited since it and the
+CPU and numeric libraries it ran on; for a long run that is resumed, one line per start (``provenance.jsonl``)."""
 
 from __future__ import annotations
 
 import json
+import os
+import platform
 import subprocess
 import sys
 import time
+from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -41,11 +44,48 @@ def git_state() -> dict[str, Any]:
     return {"git_commit": commit, "git_modified": modified}
 
 
+NUMERIC_PACKAGES = ("numpy", "numba", "torch", "mujoco")
+"""Libraries whose floating point a result depends on (`machine_state` records their versions)."""
+
+
+def _cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def _version(package: str) -> str | None:
+    try:
+        return metadata.version(package)
+    except metadata.PackageNotFoundError:
+        return None
+
+
+def machine_state() -> dict[str, Any]:
+    """The machine a result was made on: CPU model, the CPU numba's kernels are compiled for (``llvm_cpu``), core
+    count, Python and the numeric libraries' versions. Float results (numba, MuJoCo, torch) can differ in their last
+    digits between CPUs, and a closed-loop run that grazes a clearance margin can then end otherwise (one held-out
+    clip did: ``docs/results/2026-12-07-lazy-heuristic``)."""
+    import llvmlite.binding
+
+    return {"cpu": _cpu_model(), "llvm_cpu": llvmlite.binding.get_host_cpu_name(), "cores": os.cpu_count(),
+            "python": platform.python_version(), "packages": {name: _version(name) for name in NUMERIC_PACKAGES}}
+
+
+def provenance() -> dict[str, Any]:
+    """What a result's ``config.json`` records of its making: `git_state` and ``machine`` (`machine_state`)."""
+    return {**git_state(), "machine": machine_state()}
+
+
 def record_start(folder: Path, **fields: Any) -> None:
     """Append to ``folder/provenance.jsonl`` one line for this start or resume of a long run: the UTC time, the
-    command line, ``fields`` (where the run starts, the threads it runs on) and the code (`git_state`). A run resumed
-    under other code or other thread counts shows it here."""
+    command line, ``fields`` (where the run starts, the threads it runs on), the code and the machine (`provenance`).
+    A run resumed under other code, thread counts or machine shows it here."""
     line = {"started_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "argv": sys.argv, **fields,
-            **git_state()}
+            **provenance()}
     with (Path(folder) / PROVENANCE_FILE).open("a", encoding="utf-8") as fh:
         fh.write(json.dumps(line) + "\n")

@@ -1,4 +1,4 @@
-"""`np_sim.provenance.git_state`: a result names the commit and any edited Python file it ran with."""
+"""`np_sim.provenance`: a result names the commit and any edited Python file it ran with, and the machine."""
 
 import subprocess
 
@@ -43,3 +43,17 @@ def test_outside_a_checkout_the_state_is_unknown(tmp_path, monkeypatch):
     monkeypatch.setattr(common, "REPO_ROOT", tmp_path)
     monkeypatch.setenv("GIT_CEILING_DIRECTORIES", str(tmp_path.parent))
     assert common.git_state() == {"git_commit": "unknown", "git_modified": None}
+
+
+def test_a_result_also_names_the_machine_and_the_numeric_libraries_it_ran_on(repo):
+    """`provenance` adds the CPU, the CPU numba compiles for and the numeric libraries' versions to `git_state`:
+    float results can differ between machines (one held-out clip did)."""
+    import numba
+    import numpy
+
+    record = common.provenance()
+    assert {k: record[k] for k in ("git_commit", "git_modified")} == common.git_state()
+    machine = record["machine"]
+    assert machine["packages"]["numpy"] == numpy.__version__ and machine["packages"]["numba"] == numba.__version__
+    assert machine["cores"] >= 1 and machine["cpu"] and machine["llvm_cpu"]
+    assert set(machine["packages"]) == set(common.NUMERIC_PACKAGES)
