@@ -3,7 +3,8 @@
 
 * Hybrid A* on the frozen test starts (all of them, or a seeded subset of N): success, plan time median / p90 and
   expanded nodes median, every returned path re-checked with the rule it is scored by (``np_sim.validate``; the
-  first query of a scene includes building its heuristic grid; one warm-up query loads the compiled kernels first);
+  first query of a scene includes building its heuristic grid's free cells, and each query the grid distances it
+  is the first to ask for; one warm-up query loads the compiled kernels first);
 * the OMPL peer (RRT*, same time budget) and Hybrid A* on the same seeded subset of M starts: success and tree
   vertices.
 
