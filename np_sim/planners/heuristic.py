@@ -107,9 +107,9 @@ def boundary_cells(boundary: np.ndarray, origin_x: float, origin_y: float, cell_
 
 
 SETTLED = 1
-"""``LazyGrid.status`` bit: the cell has been popped from Dijkstra's queue, its ``dist`` is final."""
+"""Bit of the ``status`` array of ``lazy_grid``: the cell has been popped from Dijkstra's queue, its ``dist`` is final."""
 KNOWN = 2
-"""``LazyGrid.status`` bit: the cell's heuristic value ``out`` is computed."""
+"""Bit of the ``status`` array of ``lazy_grid``: the cell's heuristic value ``out`` is computed."""
 
 
 def lazy_grid(free: np.ndarray, goal_row: int, goal_col: int) -> tuple:
