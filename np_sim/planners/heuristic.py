@@ -107,7 +107,7 @@ def boundary_cells(boundary: np.ndarray, origin_x: float, origin_y: float, cell_
 
 
 SETTLED = 1
-"""Bit of the ``status`` array of ``lazy_grid``: the cell has been popped from Dijkstra's queue, its ``dist`` is final."""
+"""Bit of the ``status`` array of ``lazy_grid``: the cell was popped from the queue, its ``dist`` is final."""
 KNOWN = 2
 """Bit of the ``status`` array of ``lazy_grid``: the cell's heuristic value ``out`` is computed."""
 
