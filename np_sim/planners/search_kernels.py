@@ -35,7 +35,7 @@ from np_sim.kernels.kinematics import arc_point, wrap_angle
 from np_sim.kernels.reeds_shepp import rs_arcs_into, rs_length
 from np_sim.kernels.swept import EXACT_TOLERANCE_M, swept_arc_contact
 from np_sim.planners.heap import heap_pop, heap_push
-from np_sim.planners.heuristic import KNOWN, grid_distance
+from np_sim.planners.heuristic import grid_distance
 
 # status codes returned by ``expand``
 FOUND = 0
@@ -91,9 +91,7 @@ def grid_lookup(hgrid, origin_x: float, origin_y: float, cell_m: float, x: float
     row = int(math.floor((y - origin_y) / cell_m + 0.5))
     if row < 0 or row >= hgrid[0].shape[0] or col < 0 or col >= hgrid[0].shape[1]:
         return math.inf
-    known = hgrid[3][row, col] & KNOWN  # the common case, read without a call
-    distance = hgrid[2][row, col] if known else grid_distance(hgrid, cell_m, row, col)
-    return max(0.0, distance - math.sqrt(2.0) * cell_m)
+    return max(0.0, grid_distance(hgrid, cell_m, row, col) - math.sqrt(2.0) * cell_m)
 
 
 @njit(cache=True, error_model="numpy")

@@ -222,6 +222,28 @@ def test_a_run_stopped_by_a_signal_is_reported_as_resumable_not_failed(tmp_path,
     assert task_verdict(results[0]) == "done" and task_verdict(results[2]) == "FAILED (exit 1, log x.log)"
 
 
+def test_ctrl_c_during_the_sweep_stops_exactly_the_runs_it_submitted_and_exits_130(tmp_path, capsys, monkeypatch):
+    """The wiring of Ctrl-C: the interrupt reaching ``main`` hands the runs it submitted (the unfinished ones, not a
+    finished one) to ``stop_trainers`` and ends with status 130 and how to continue."""
+    plan, root = _plan(tmp_path, TINY), tmp_path / "runs"
+    finished = expand(load_plan(str(plan))[0], [0], root, ["main"], tmp_path)[0]
+    finished.run_dir.mkdir(parents=True)
+    finished.output.write_bytes(b"")
+    (finished.run_dir / "metrics.jsonl").write_text("".join(json.dumps({"epoch": e}) + "\n" for e in (1, 2)))
+    submitted, asked = [], []
+
+    def interrupted(todo, args):
+        submitted.extend(run.name for run in todo)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(sweep_module, "run_sweep", interrupted)
+    monkeypatch.setattr(sweep_module, "stop_trainers", lambda runs: asked.extend(run.name for run in runs))
+    argv = ["--plan", str(plan), "--seeds", "0", "1", "--out", str(root), "--log-dir", str(tmp_path / "l")]
+    assert main(argv) == 130
+    assert asked == submitted and len(submitted) == 3 and finished.name not in submitted
+    assert "interrupted; its trainers are stopped. Run the same command again" in capsys.readouterr().err
+
+
 def test_an_interrupted_sweep_stops_its_trainers_after_their_epoch_each_with_a_snapshot(tmp_path, capsys):
     """What the sweep does on Ctrl-C before its Ray goes down: a trainer of one of its runs, midway between periodic
     snapshots, gets SIGUSR1 and ends with a snapshot at its last complete epoch; a trainer of another run is left."""
