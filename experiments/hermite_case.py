@@ -207,5 +207,6 @@ def main(argv=None) -> dict:
     """Command-line entry point (usage in the module docstring)."""
     return case_main("hermite_case", __doc__, run, argv)
 
+
 if __name__ == "__main__":
     main()

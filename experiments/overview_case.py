@@ -179,5 +179,6 @@ def main(argv=None) -> dict:
     """Command-line entry point (usage in the module docstring)."""
     return case_main("overview_case", __doc__, run, argv, benchmarks=tuple(CASE_SCENES))
 
+
 if __name__ == "__main__":
     main()

@@ -71,6 +71,7 @@ from np_sim.starts import StartSampler
 
 __all__ = ["HopeParkingEnv", "HopeVectorEnv", "episode_plan"]
 
+
 def kernel_config(config: HopeEnvConfig) -> np.ndarray:
     """The scalar settings of ``config`` as the float array ``P`` the step kernel reads."""
     P = np.zeros(K.P_SIZE)
@@ -90,11 +91,13 @@ def kernel_config(config: HopeEnvConfig) -> np.ndarray:
     P[K.P_MASK_WIDTH] = config.mask_filter_width
     return P
 
+
 def _benchmark_config(config: HopeEnvConfig) -> EnvConfig:
     """The benchmark env's config for the parts it shares with the HOPE env: vehicle, connector, convention,
     LiDAR geometry (its own observation streams are off: the HOPE env writes its own)."""
     ob = dataclasses.replace(config.observation, use_obstacles=False, use_boundary=False, use_lidar=False)
     return EnvConfig(vehicle=config.vehicle, observation=ob, connector=config.connector, collision=config.collision)
+
 
 def episode_plan(start, arcs, hermite_points=None, hermite_forward: bool = True, hermite_length: float = 0.0,
                  hermite_delta_kappa: float = 0.0, success: bool = False, reason: str = "") -> Plan:
@@ -106,6 +109,7 @@ def episode_plan(start, arcs, hermite_points=None, hermite_forward: bool = True,
                                  float(hermite_delta_kappa))
     return Plan(start=np.asarray(start, float).copy(), arcs=np.asarray(arcs, float).reshape(-1, 2).copy(),
                 hermite=hermite, success=bool(success), reason=reason)
+
 
 class HopeCore:
     """State of ``num_envs`` adapted-HOPE episodes over a list of scenes, stepped by one compiled call. Scenes,
@@ -226,6 +230,7 @@ class HopeCore:
         return episode_plan(self.starts[i], self.arc_log[i, :n], points, R[K.R_H_FORWARD] > 0, R[K.R_H_LEN],
                             R[K.R_H_DK], bool(R[K.R_SUCCESS]), reason)
 
+
 class HopeParkingEnv(gym.Env):
     """One adapted-HOPE episode at a time (the batched core with one env); see the module docstring."""
 
@@ -253,6 +258,7 @@ class HopeParkingEnv(gym.Env):
         if terminated or truncated:
             info["plan"] = core.plan(0)
         return core.observation(0), float(R[K.R_REWARD]), terminated, truncated, info
+
 
 class HopeVectorEnv(VectorEnv):
     """N adapted-HOPE episodes over a list of scenes, stepped in one compiled call (same-step autoreset).

@@ -79,4 +79,3 @@ def action_to_arc(actions, config: HopeEnvConfig) -> np.ndarray:
     steer_curvature = np.tan(a[..., 0] * config.max_steer_rad) / config.vehicle.wheelbase_m
     length = a[..., 1] * config.max_length_m
     return np.stack([-np.sign(length) * steer_curvature, length], axis=-1)
-

@@ -178,4 +178,3 @@ def step_batch(geo, targets, S, P, W_row, arcs, local, queue, b_ranges, off_c, o
             S[i, S_RS_LEN], S[i, S_RS_POS] = m, 0.0
             R[i, R_RS_FOUND] = 1.0 if m > 0 else 0.0
         observe_one(geo, k, nx, ny, nth, target, P, b_ranges, off_c, off_s, tables, lidar[i], tgt[i], mask[i])
-

@@ -44,4 +44,3 @@ def footprint_ranges(vehicle: VehicleSpec | None = None, n_beams: int = 120) -> 
                       np.where(c < 0, vehicle.rear_overhang_m / np.where(c < 0, -c, 1.0), np.inf))
         ty = np.where(np.abs(s) > 0, 0.5 * vehicle.width_m / np.where(np.abs(s) > 0, np.abs(s), 1.0), np.inf)
     return np.minimum(tx, ty)
-

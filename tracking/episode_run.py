@@ -84,4 +84,3 @@ def episode_columns(run: EpisodeRun) -> dict:
 
 
 __all__ = ["EpisodeRun", "episode_columns", "run_episode"]
-

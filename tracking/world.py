@@ -211,7 +211,6 @@ class World:
                         d.contact.pos[h].copy()))
         return out
 
-
     def _overlaps(self) -> list[tuple[str, np.ndarray]]:
         m, d, chassis = self.model, self.data, self.chassis_geom
         ids = np.fromiter(self.geom_names, dtype=int, count=len(self.geom_names))

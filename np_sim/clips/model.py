@@ -259,4 +259,3 @@ class Clip:
 def _json_float(value: float) -> float | str:
     """A float for JSON; inf as the string "inf" (JSON has no infinity)."""
     return "inf" if math.isinf(value) else float(value)
-

@@ -197,4 +197,3 @@ def cached_training_pool(path: str | Path, n: int, seed: int, *, observation=SIT
         pickle.dump({"key": key, "scenes": scenes, "starts": starts}, f, protocol=pickle.HIGHEST_PROTOCOL)
     tmp.replace(path)
     return scenes, starts
-

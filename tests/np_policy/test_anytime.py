@@ -111,7 +111,6 @@ def test_clearance_at_samples_covers_the_body_between_them(kappa, ds, theta, gea
         assert covered.covers(ShapelyPolygon(body.footprint(arc_point(*start, kappa, gear * ds * f))))
 
 
-
 def test_the_grown_body_mean_rollout_answers_first_and_keeps_the_clearance_with_the_real_body(planners):
     """Training clip 39 (never a held-out one): the plain mean rollout parks with under 0.1 m to spare, the mean
     rollout played with the body grown by 0.2 m keeps 0.2 m and answers the call; shapely measures the real body."""

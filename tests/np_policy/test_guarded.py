@@ -30,7 +30,6 @@ GUARDED = dataclasses.replace(FOOTPRINT_ANYTIME, guard_sigmas=(1.0, 2.0, 3.0))
 docs/best_of_n.md, 2026-12-06)."""
 
 
-
 @pytest.fixture(scope="module")
 def planner():
     return NeuralParkerPlanner(Policy.load(CHECKPOINT), GUARDED)

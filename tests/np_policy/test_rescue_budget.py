@@ -21,7 +21,6 @@ def policy():
     return Policy.load(CHECKPOINT)
 
 
-
 def test_an_arc_budget_cuts_only_the_rollouts_that_run_past_it(policy):
     """Under a budget of K arcs every rollout that ends within K arcs is the rollout of the full budget, arc for
     arc; every longer one ends after its first K arcs as a timeout. Training clip 60 at 2 σ, seed 7: rollouts of 1

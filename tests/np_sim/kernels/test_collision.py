@@ -212,7 +212,6 @@ def test_poses_valid_is_all_of_the_rows(packed):
     assert poses_valid(geo, 0, np.empty((0, 3)), True, LOCAL)  # an empty path is valid
 
 
-
 def test_chunked_footprint_paths_match_the_per_pose_rule(packed):
     """``poses_valid`` checks footprint paths in chunks of nearby poses, skipping the edges and obstacles far from a
     chunk: its verdict must equal the per-pose rule (``footprint_valid``, itself checked against shapely above) on
@@ -234,6 +233,7 @@ def test_chunked_footprint_paths_match_the_per_pose_rule(packed):
             assert [bool(poses_valid(geo, k, poses[i:i + 1], True, LOCAL)) for i in range(n)] == per_pose
             outcomes.add((n > CHUNK_POSES, all(per_pose)))
     assert outcomes == {(False, True), (False, False), (True, True), (True, False)}
+
 
 def _exact_scene(extra_obstacles, boundary=None) -> Scene:
     return Scene.from_dict(
