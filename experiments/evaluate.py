@@ -145,7 +145,8 @@ def main(argv=None) -> dict[str, Any]:
                         help="one checkpoint per seed")
     parser.add_argument("--preset", choices=sorted(PRESETS), default="paper",
                         help="how the planner plays the policy (np_policy.config.PRESETS; default paper: the "
-                             "deterministic planner of the paper and docs/specification.md); the flags below replace one field of it")
+                             "deterministic planner of the paper and docs/specification.md); the flags below "
+                             "replace one field of it")
     parser.add_argument("--connector", choices=CONNECTOR_VARIANTS, default=None,
                         help="override the terminal connector (centred: the fixed nine, target-aligned first)")
     parser.add_argument("--samples", type=non_negative_int, default=None, metavar="N",

@@ -90,7 +90,8 @@ def table_cli(paper: PaperTable, experiment: str, doc: str,
 
     @cli_boundary
     def main(argv=None) -> dict[str, Any]:
-        parser = argparse.ArgumentParser(prog=f"python -m experiments.{experiment}", description=f"{doc.split('Usage, outputs')[0]}"
+        parser = argparse.ArgumentParser(prog=f"python -m experiments.{experiment}",
+                                         description=f"{doc.split('Usage, outputs')[0]}"
                                          f"python -m experiments.{experiment} [--runs DIR] [--out DIR] "
                                          f"[--no-evaluate]\n\n{HOW}",
                                          formatter_class=argparse.RawDescriptionHelpFormatter)

@@ -19,9 +19,10 @@ the plan itself; every validity column requires it). ``--vehicle`` plans for ano
 the searches' footprint and κ_max, the validators' footprint; a learned planner's checkpoint must have been trained
 for it); the frozen starts were drawn for the default car, so each record says whether the vehicle's footprint
 at its start is free (``start_footprint_free``) and the table counts those that are not. Writes ``records.csv``/
-``records.json`` (one row per episode and method), ``table.md`` and ``config.json`` into the run folder. Each finished episode is kept
-in the folder as the run goes (`experiments.progress`): after a kill, ``--resume`` with the same arguments and
-``--out`` plans only the episodes that were not finished, and the records equal an uninterrupted run's.
+``records.json`` (one row per episode and method), ``table.md`` and ``config.json`` into the run folder. Each
+finished episode is kept in the folder as the run goes (`experiments.progress`): after a kill, ``--resume`` with the
+same arguments and ``--out`` plans only the episodes that were not finished, and the records equal an uninterrupted
+run's.
 
 ``--scenes FILE...`` plans your own scene files instead (`experiments.scene_files`): each file's explicit starts,
 or ``--starts N`` drawn from its start region with ``--seed S``; records add the file and the start pose, and
@@ -75,8 +76,8 @@ def run(benchmark: str, methods: list[str] | None = None, checkpoint: Path | Non
     methods = check_names(DEFAULT_METHODS if methods is None else methods, METHODS)
     vehicle = VehicleSpec() if vehicle is None else vehicle
     options = PlannerOptions(checkpoint=checkpoint, convention=convention, ompl_seed=ompl_seed,
-                             benchmark=None if scenes else benchmark, hope_checkpoint=hope_checkpoint, hope_action=hope_action,
-                             hope_seed=hope_seed, vehicle=vehicle)
+                             benchmark=None if scenes else benchmark, hope_checkpoint=hope_checkpoint,
+                             hope_action=hope_action, hope_seed=hope_seed, vehicle=vehicle)
     planners = build_planners(methods, options)
     files = (load_scene_files(scenes, n_starts, seed, strictest(p.convention for p in planners.values()), vehicle)
              if scenes else None)

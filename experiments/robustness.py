@@ -13,8 +13,8 @@ each factor acts on an episode).
 With ``--clips``, every clip × planner of the closed-loop study (`experiments.closed_loop`: same planners, clips,
 tracker and ``--set`` settings) is driven once undisturbed (level 'none') and once per factor of ``--factors``
 (default all eight of `tracking.disturbance.FACTORS`: detection noise and drops, localisation noise with drift,
-actuation latency, a slower steering actuator, tyre friction, a payload shifting the centre of mass, a longer body) at each
-of ``--levels``. With ``--benchmark`` or ``--scenes``, every episode × planner likewise (planners default to the
+actuation latency, a slower steering actuator, tyre friction, a payload shifting the centre of mass, a longer body)
+at each of ``--levels``. With ``--benchmark`` or ``--scenes``, every episode × planner likewise (planners default to the
 searches and, with a checkpoint (the shipped Factorial one by default), the learned planners). Every planner meets
 the same draws: a run's random draws are seeded by ``--seed`` and the clip or episode (``--seed`` also draws the
 starts of scene files with ``--starts``).

@@ -115,8 +115,8 @@ class Configuration:
 _LOT = "{name}_seed{seed}_lot"
 """Run folders of the recipe's rows: the shipped Factorial seeds were named for the whole-lot curriculum."""
 _TOPOLOGY_AE = (("checkpoints/bev/topology_ae.pt",
-                  "python -m np_policy.pretrain_bev --benchmark topology --out checkpoints/bev/topology_ae.pt "
-                  "--seed 0"),)
+                 "python -m np_policy.pretrain_bev --benchmark topology --out checkpoints/bev/topology_ae.pt "
+                 "--seed 0"),)
 PAPER_PLAN = (
     Configuration("factorial_np", "factorial", ("main", "staged", "connector", "curriculum"), "factorial_np.json",
                   run_name=_LOT),

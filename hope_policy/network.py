@@ -6,9 +6,10 @@ raster's frozen-autoencoder latent (`hope_policy.inputs`) by HOPE's re-embedding
 ``tanh → Linear``; the target-relative vertices by the attention-based vertex branch the paper names
 (``VertexBranch``: NeuralParker's slot tokens and self-attention). The embeddings form a sequence of tokens fused
 by one pre-norm attention block (eight 32-D heads, a 128-unit tanh feed-forward sublayer, residual connections);
-the flattened tokens pass a 128-unit tanh hidden layer to the output. The actor's output is squashed by tanh and is the mean of a diagonal
-Gaussian over the normalised 2-D action with a state-independent learned log standard deviation (initially 0);
-the critic's output is the value. Weights are orthogonal with gain 1 and biases zero, as in HOPE.
+the flattened tokens pass a 128-unit tanh hidden layer to the output. The actor's output is squashed by tanh and is
+the mean of a diagonal Gaussian over the normalised 2-D action with a state-independent learned log standard
+deviation (initially 0); the critic's output is the value. Weights are orthogonal with gain 1 and biases zero, as
+in HOPE.
 
 HOPE's unused ``view_embed`` parameter (created as zeros and never added) is left out.
 """

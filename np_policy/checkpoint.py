@@ -296,7 +296,7 @@ def upgrade_checkpoint(path: str | Path) -> bool:
     try:
         load_checkpoint(path)
         return False
-    except CheckpointError as exc:
+    except CheckpointError:
         if _pickled_format(path) != LEGACY_FORMAT:
             raise
     try:

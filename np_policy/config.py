@@ -537,7 +537,7 @@ class NeuralParkerConfig:
                               "is an anytime answer; it needs accept_mean_m (the anytime test), got None")
         sigmas = self.guard_sigmas
         if not (isinstance(sigmas, (tuple, list)) and all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                                                         and math.isfinite(v) and v > 0 for v in sigmas)):
+                                                          and math.isfinite(v) and v > 0 for v in sigmas)):
             raise ConfigError(f"NeuralParkerConfig.guard_sigmas: expected a list of finite numbers > 0 (multiples of "
                               f"the policy's standard deviation), got {sigmas!r}")
         object.__setattr__(self, "guard_sigmas", tuple(float(v) for v in sigmas))

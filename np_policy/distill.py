@@ -186,8 +186,8 @@ def distill(checkpoint: Path, out: Path, resets: int = 1500, epochs: int = 20, l
     policy = Policy.load(checkpoint, "site")
     rows = fit(policy, obs, actions, owner, epochs, learning_rate, seed, progress)
     summary = {"checkpoint": str(checkpoint), "resets": counts["resets"], "epochs": epochs,
-               "learning_rate": learning_rate, "seed": seed, "validation_clips_skipped": VALIDATION_CLIPS, "pairs": int(len(obs)),
-               "counts": counts, "losses": rows}
+               "learning_rate": learning_rate, "seed": seed, "validation_clips_skipped": VALIDATION_CLIPS,
+               "pairs": int(len(obs)), "counts": counts, "losses": rows}
     payload = load_checkpoint(checkpoint)
     payload["model"] = policy.model.state_dict()
     payload["distill"] = {k: v for k, v in summary.items() if k != "losses"}
@@ -212,7 +212,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--learning-rate", type=positive_float, default=1e-4, help="Adam's step size (default 1e-4)")
     parser.add_argument("--pairs", type=Path,
                         help="fit on the pairs.npz of an earlier run (same --checkpoint) instead of planning again")
-    parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the resets, the hold-out and the shuffling")
+    parser.add_argument("--seed", type=non_negative_int, default=0,
+                        help="seed of the resets, the hold-out and the shuffling")
     args = parser.parse_args(argv)
     if args.out is None:
         args.out = Path("results/distill") / time.strftime("%Y%m%d-%H%M%S")

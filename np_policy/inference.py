@@ -294,9 +294,9 @@ class CompiledActor:
 
     def mean_rollout(self, core) -> np.ndarray:
         """(arcs, 2) normalised actions of env 0's mean rollout in ``core`` from its current state (reset first, its
-        observation row as the reset wrote it; ``plays_rollout`` must hold), ``core`` left at its end: the batched loop of `np_policy.sampling` with a batch
-        of one and zero noise, arc for arc, in one compiled call (module docstring). ValueError on a non-finite
-        action, as the env's step raises."""
+        observation row as the reset wrote it; ``plays_rollout`` must hold), ``core`` left at its end: the batched
+        loop of `np_policy.sampling` with a batch of one and zero noise, arc for arc, in one compiled call (module
+        docstring). ValueError on a non-finite action, as the env's step raises."""
         actions = np.empty((int(core.P[K.P_MAX_ARCS]), 2))
         n = _mean_rollout(core.geo, core.arrays.targets, core.static_obs, core.S, core.P, core.local, core.b_ranges,
                           core.off_c, core.off_s, core.offsets, core.headings, core.scales0, core.scales1, core.basis,

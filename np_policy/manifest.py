@@ -106,34 +106,39 @@ def _folder(root: str | Path) -> Path:
     return Path(root)
 
 
+def _relative(path: str | Path, base: Path) -> str:
+    """``path`` relative to ``base``, with forward slashes."""
+    return Path(path).resolve().relative_to(base).as_posix()
+
+
 def build_manifest(root: str | Path = DEFAULT_ROOT) -> dict[str, Any]:
     """The manifest of the checkpoint folder ``root`` (see the module docstring); paths are relative to
     ``root``'s parent (the repository), so they read ``checkpoints/...``."""
     root = _folder(root)
     base = root.resolve().parent
-    rel = lambda p: Path(p).resolve().relative_to(base).as_posix()  # noqa: E731
     runs = run_folders(root)
     files = {}
     for path in shipped_files(root):
         payload = load_checkpoint(path)
         digest = file_sha256(path)
         if payload.get("kind") == AUTOENCODER_KIND:
-            files[rel(path)] = autoencoder_entry(payload, digest, path.stat().st_size)
+            files[_relative(path, base)] = autoencoder_entry(payload, digest, path.stat().st_size)
             continue
         run, copy_of = _source_run(path, payload, runs, digest)
-        entry = {"run": rel(run), "epoch": payload.get("epoch"), "config": rel(run / "config.json"),
-                 "sha256": digest, "size_bytes": path.stat().st_size, "format": CHECKPOINT_FORMAT}
+        entry = {"run": _relative(run, base), "epoch": payload.get("epoch"),
+                 "config": _relative(run / "config.json", base), "sha256": digest,
+                 "size_bytes": path.stat().st_size, "format": CHECKPOINT_FORMAT}
         if copy_of is not None:
-            entry["copy_of"] = rel(copy_of)
-        files[rel(path)] = entry
-    resumable = [rel(run) for run in runs if (run / "snapshot.pt").exists()]
+            entry["copy_of"] = _relative(copy_of, base)
+        files[_relative(path, base)] = entry
+    resumable = [_relative(run, base) for run in runs if (run / "snapshot.pt").exists()]
     return {"format": MANIFEST_FORMAT, "about": _ABOUT, "files": files, "resumable_runs": resumable}
 
 
 def manifest_differences(stored: dict[str, Any], built: dict[str, Any]) -> list[str]:
     """What differs between a ``stored`` manifest and one ``built`` from the files, one phrase per difference."""
     out = [] if stored.get("format") == MANIFEST_FORMAT else [f"format is {stored.get('format')!r}, expected "
-                                                               f"{MANIFEST_FORMAT!r}"]
+                                                              f"{MANIFEST_FORMAT!r}"]
     listed, found = stored.get("files", {}), built["files"]
     out += [f"{p}: listed but not found (or its run can be resumed now)" for p in sorted(set(listed) - set(found))]
     out += [f"{p}: shipped but not listed" for p in sorted(set(found) - set(listed))]

@@ -39,7 +39,7 @@ from np_policy.guarded import GuardedRollout
 from np_policy.inference import CompiledActor
 from np_policy.network import ActorCritic
 from np_policy.sampling import (PolicyRollouts, choose, clearance_covers_sweep, clearance_level, curve_surcharge,
-                               pose_clearance_level, steerable)
+                                pose_clearance_level, steerable)
 from np_sim.collision import path_valid
 from np_sim.config import EnvConfig
 from np_sim.errors import ConfigError, StartInCollisionError

@@ -184,6 +184,10 @@ class Trainer:
         self.obs, _ = self.envs.reset()
         self.episode_return = np.zeros(ppo.num_train_envs)
 
+    def _flat_tensor(self, a: np.ndarray) -> torch.Tensor:
+        """``a`` (steps, envs, ...) as one tensor of (steps × envs, ...) samples."""
+        return self._tensor(np.ascontiguousarray(a.reshape(-1, *a.shape[2:])))
+
     def _tensor(self, array: np.ndarray) -> torch.Tensor:
         """A numpy array of the envs as a tensor on the training device (the same memory on the CPU)."""
         return torch.from_numpy(array).to(self.device)
@@ -232,7 +236,7 @@ class Trainer:
         set_learning_rate(self.optimizer, ppo.lr_at(self.updates))
         advantages, returns = compute_targets(roll["rewards"], roll["values"], roll["next_values"],
                                               roll["terminated"], roll["truncated"], ppo, self.return_rms)
-        flat = lambda a: self._tensor(np.ascontiguousarray(a.reshape(-1, *a.shape[2:])))  # noqa: E731
+        flat = self._flat_tensor
         batch = {"obs": flat(roll["obs"]), "actions": flat(roll["actions"]), "log_probs": flat(roll["log_probs"]),
                  "advantages": flat(advantages.astype(np.float32)), "returns": flat(returns.astype(np.float32)),
                  "values": flat(roll["values"])}

@@ -190,7 +190,8 @@ class EnvConfig:
             raise ConfigError(f"ConnectorConfig.mode: expected 'ensemble' or 'fixed', got {self.connector.mode!r}")
         if self.connector.kappa_max > self.vehicle.kappa_max:
             raise ConfigError(
-                f"ConnectorConfig.kappa_max={self.connector.kappa_max} exceeds VehicleSpec.kappa_max={self.vehicle.kappa_max}"
+                f"ConnectorConfig.kappa_max={self.connector.kappa_max} exceeds "
+                f"VehicleSpec.kappa_max={self.vehicle.kappa_max}"
             )
 
     def for_vehicle(self, vehicle: VehicleSpec) -> "EnvConfig":

@@ -58,7 +58,8 @@ class CurriculumSchedule:
         if not isinstance(self.enabled, bool):
             raise ConfigError(f"CurriculumSchedule.enabled: expected a boolean, got {self.enabled!r}")
         if not (isinstance(self.start_fraction, (int, float)) and 0.0 < self.start_fraction <= 1.0):
-            raise ConfigError(f"CurriculumSchedule.start_fraction: expected a number in (0, 1], got {self.start_fraction!r}")
+            raise ConfigError("CurriculumSchedule.start_fraction: expected a number in (0, 1], "
+                              f"got {self.start_fraction!r}")
         if not (isinstance(self.full_at_progress, (int, float)) and 0.0 < self.full_at_progress <= 1.0):
             raise ConfigError(
                 f"CurriculumSchedule.full_at_progress: expected a number in (0, 1], got {self.full_at_progress!r}")
@@ -163,6 +164,7 @@ class CurriculumStartSampler:
         """(n, 3) starts: for each requested scene, one uniform pick among its `n_active` nearest pool starts."""
         idx = np.atleast_1d(np.asarray(scene_indices, np.int64))
         if len(idx) and (idx.min() < 0 or idx.max() >= len(self.scenes)):
-            raise ConfigError(f"CurriculumStartSampler: scene index out of range [0, {len(self.scenes)}): {idx.tolist()}")
+            raise ConfigError(f"CurriculumStartSampler: scene index out of range [0, {len(self.scenes)}): "
+                              f"{idx.tolist()}")
         picks = rng.integers(self.n_active, size=len(idx))
         return self.pool[idx, picks].copy()

@@ -60,7 +60,8 @@ __all__ = ["EnvConfig", "ParkingEnv", "ParkingVectorEnv"]
 def _observation_space(config: EnvConfig, size: int) -> spaces.Space:
     if config.observation.flat:
         return spaces.Box(-np.inf, np.inf, (size,), np.float32)
-    return spaces.Dict({k: spaces.Box(-np.inf, np.inf, s, np.float32) for k, s in section_shapes(config.observation).items()})
+    return spaces.Dict({k: spaces.Box(-np.inf, np.inf, s, np.float32)
+                        for k, s in section_shapes(config.observation).items()})
 
 
 def _action_space() -> spaces.Box:
@@ -92,7 +93,8 @@ class ParkingEnv(gym.Env):
     def step(self, action):
         self.core.step(np.asarray(action, np.float64).reshape(1, 2))
         R = self.core.R[0]
-        info = {k: (v[0].copy() if isinstance(v[0], np.ndarray) else v[0].item()) for k, v in self.core.step_info().items()}
+        info = {k: (v[0].copy() if isinstance(v[0], np.ndarray) else v[0].item())
+                for k, v in self.core.step_info().items()}
         return self._obs(), float(R[K.R_REWARD]), bool(R[K.R_TERMINATED]), bool(R[K.R_TRUNCATED]), info
 
 

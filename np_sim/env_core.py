@@ -204,7 +204,7 @@ class BatchCore:
                         f"{self.scenes[k].name or k!r} under the {self.config.collision} convention"
                     )
         self.S[env_ids] = 0.0
-        self.S[env_ids, K.S_X : K.S_TH + 1] = poses
+        self.S[env_ids, K.S_X:K.S_TH + 1] = poses
         self.S[env_ids, K.S_SCENE] = scenes
         K.observe_batch(self.geo, self.arrays.targets, self.static_obs, self.S, self.P, self.b_ranges, self.off_c,
                         self.off_s, env_ids, self.obs)
@@ -276,7 +276,7 @@ class BatchCore:
             "hermite_length": R[:, K.R_H_LEN].copy(),
             "hermite_delta_kappa": R[:, K.R_H_DK].copy(),
             "scene_index": self.S[:, K.S_SCENE].astype(np.int64),
-            "pose": self.S[:, K.S_X : K.S_TH + 1].copy(),
+            "pose": self.S[:, K.S_X:K.S_TH + 1].copy(),
             "n_arcs": self.S[:, K.S_N_ARCS].astype(np.int64),
         }
         info.update(self.episode_metrics())

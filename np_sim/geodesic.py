@@ -54,7 +54,8 @@ class GeodesicGrid:
         return out
 
 
-def geodesic_grid(scene: Scene, cell_m: float = 1.5, n_headings: int = 16, vehicle: VehicleSpec | None = None) -> GeodesicGrid:
+def geodesic_grid(scene: Scene, cell_m: float = 1.5, n_headings: int = 16,
+                  vehicle: VehicleSpec | None = None) -> GeodesicGrid:
     """Build the footprint-inflated grid of ``scene`` and its geodesic distances to the target."""
     vehicle = VehicleSpec() if vehicle is None else vehicle
     local = vehicle.footprint_local()

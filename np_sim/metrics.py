@@ -17,7 +17,8 @@ def plan_metrics(arcs, hermite_length: float | None = None, hermite_delta_kappa:
     kappa, length = a[:, 0], a[:, 1]
     has_h = hermite_length is not None
     if has_h and (hermite_delta_kappa is None or hermite_forward is None):
-        raise ValueError("plan_metrics: a Hermite segment needs hermite_length, hermite_delta_kappa and hermite_forward")
+        raise ValueError("plan_metrics: a Hermite segment needs hermite_length, hermite_delta_kappa and "
+                         "hermite_forward")
     total = float(np.abs(length).sum()) + (float(hermite_length) if has_h else 0.0)
     reversals = int(np.count_nonzero(length[1:] * length[:-1] < 0))
     dk = float(np.abs(np.diff(kappa)).sum())

@@ -382,8 +382,8 @@ def reference_step(scene, pose, prev_kappa: float, prev_length: float, first_arc
 
     out = {"kappa": kappa, "length": length, "pose": new_pose, "valid": bool(valid), "terminated": False,
            "truncated": False, "success": False, "hermite_index": -1, "hermite_length": 0.0,
-           "hermite_delta_kappa": 0.0, "hermite_n_feasible": 0, "hermite_first_not_cheapest": False, "n_rev": n_rev, "dk_eff": dk_eff,
-           "n_arcs": n_arcs + 1, "direct": False}
+           "hermite_delta_kappa": 0.0, "hermite_n_feasible": 0, "hermite_first_not_cheapest": False, "n_rev": n_rev,
+           "dk_eff": dk_eff, "n_arcs": n_arcs + 1, "direct": False}
 
     def success_reward(p_h: float) -> float:  # eq:terminal-reward
         return rw.success_bonus - rw.success_reversal_weight * n_rev - rw.success_kappa_weight * dk_eff \

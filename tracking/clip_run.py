@@ -412,8 +412,8 @@ class ReplanningLoop:
         ahead = stitch_distance(speed_mps, self.tracker.profile.accel_mps2, self.tracker.executor.replan_period_s,
                                 self.config.stitch_margin_m)
         k = int(np.searchsorted(path.rows[:, 5], s_now + ahead))
-        if k >= len(path.rows) - 1 or not path_valid(scene, path.poses[path.index:k + 1], self.convention,
-                                                      self.tracker.vehicle):
+        ahead_poses = path.poses[path.index:k + 1]
+        if k >= len(path.rows) - 1 or not path_valid(scene, ahead_poses, self.convention, self.tracker.vehicle):
             return None
         # planned in the frame's scene around the vehicle, the one the next frames check the plan against
         return self.call(path.poses[k].copy(), t, frame, scene, prefix=(path, s_now, float(path.rows[k, 5])))

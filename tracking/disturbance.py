@@ -50,7 +50,7 @@ import shapely
 
 from np_sim.errors import ConfigError
 from np_sim.scene import CircleObstacle, PolygonObstacle, Scene, obstacle_shape
-from tracking.config import PlantConfig, TrackerConfig
+from tracking.config import TrackerConfig
 
 LEVELS = ("mild", "moderate", "severe")
 """The disturbed levels, beside the undisturbed run ('none', value 0)."""

@@ -262,7 +262,8 @@ def choose_start_region(rng: np.random.Generator, scene: Scene, grid: GeodesicGr
     aim = rng.uniform(*aim_m)
     candidates = np.argwhere(np.isfinite(grid.distance) & (np.abs(grid.distance - aim) <= tolerance_m))
     rng.shuffle(candidates)
-    space = ShapelyPolygon(scene.boundary).buffer(-clearance_m).difference(union_of(scene.obstacles).buffer(clearance_m))
+    inside = ShapelyPolygon(scene.boundary).buffer(-clearance_m)
+    space = inside.difference(union_of(scene.obstacles).buffer(clearance_m))
     for row, col in candidates[:max_candidates]:
         centre = grid.origin + grid.cell_m * np.array([col, row], float)
         if allowed is not None and not allowed.contains(Point(centre)):

@@ -332,12 +332,15 @@ def _random_layout(rng: np.random.Generator, d: int, q: int, cfg: FactorialConfi
         inner = side * 0.5 * gap
         if rng.random() < 0.5:
             local.append(rectangle(inner + side * 0.5 * _CAR_W, _REF_TO_CENTRE + rng.uniform(-0.5, 0.5),
-                                   rng.uniform(4.3, 4.9), rng.uniform(1.8, 1.95), 0.5 * math.pi + rng.uniform(-0.06, 0.06)))
+                                   rng.uniform(4.3, 4.9), rng.uniform(1.8, 1.95),
+                                   0.5 * math.pi + rng.uniform(-0.06, 0.06)))
         else:
             w = rng.uniform(0.8, 2.5)
             y_lo, y_hi = rng.uniform(-1.8, -0.8), rng.uniform(3.2, 4.2)
-            pts = [(inner, y_lo), (inner, y_hi), (inner + side * w * rng.uniform(0.5, 1.0), y_hi + rng.uniform(0, 0.8)),
-                   (inner + side * w, rng.uniform(y_lo, y_hi)), (inner + side * w * rng.uniform(0.4, 1.0), y_lo - rng.uniform(0, 0.8))]
+            pts = [(inner, y_lo), (inner, y_hi),
+                   (inner + side * w * rng.uniform(0.5, 1.0), y_hi + rng.uniform(0, 0.8)),
+                   (inner + side * w, rng.uniform(y_lo, y_hi)),
+                   (inner + side * w * rng.uniform(0.4, 1.0), y_lo - rng.uniform(0, 0.8))]
             local.append(np.array(pts))
     if rng.random() < (0.3, 0.5, 0.7)[q]:
         y_back = -0.929 - rng.uniform(0.3, 0.7)
@@ -376,7 +379,8 @@ def factorial_scene(cell: FactorialCell, layout_seed: int, split: str, index: in
     n_seg = int(rng.integers(cfg.boundary_segments[q][0], cfg.boundary_segments[q][1] + 1))
     boundary = irregular_boundary(rng, layout.corners, layout.protected, n_seg, jitter_m=(0.0, 0.6, 1.2)[q],
                                   straight_edges=layout.straight_edges)
-    structural = [o for o in layout.obstacles if ShapelyPolygon(boundary).buffer(-0.1).contains(ShapelyPolygon(o.vertices))]
+    interior = ShapelyPolygon(boundary).buffer(-0.1)
+    structural = [o for o in layout.obstacles if interior.contains(ShapelyPolygon(o.vertices))]
     grid = draft_grid(boundary, structural, layout.target, vehicle, cfg.validity.cell_m)
     target_zone = ShapelyPolygon((vehicle or VehicleSpec()).footprint(layout.target)).buffer(1.5)
     region = choose_start_region(rng, Scene(boundary, tuple(structural), layout.target, None), grid, cfg.band_m[d],

@@ -71,7 +71,8 @@ def benchmark_path(name: str, data_dir: str | Path | None = None) -> Path:
 
 def _check_name(name: str, where: str) -> None:
     if name not in BENCHMARK_NAMES:
-        raise ConfigError(f"{where}: unknown benchmark {name!r}; expected one of {', '.join(map(repr, BENCHMARK_NAMES))}")
+        raise ConfigError(f"{where}: unknown benchmark {name!r}; expected one of "
+                          f"{', '.join(map(repr, BENCHMARK_NAMES))}")
 
 
 # ---------------------------------------------------------------------------------------------- frozen starts
@@ -272,7 +273,8 @@ def _read(path: str, mtime_ns: int) -> tuple[dict, dict[str, tuple[Scene, ...]],
     return doc, scenes, starts
 
 
-def read_benchmark_file(name: str, data_dir: str | Path | None = None) -> tuple[dict, dict[str, tuple[Scene, ...]], np.ndarray]:
+def read_benchmark_file(name: str, data_dir: str | Path | None = None
+                        ) -> tuple[dict, dict[str, tuple[Scene, ...]], np.ndarray]:
     """(document, scenes per split, frozen starts) of benchmark ``name`` (validated; errors name the file)."""
     path = benchmark_path(name, data_dir)
     if not path.exists():

@@ -60,7 +60,8 @@ def summarize(name: str, data_dir: str | Path | None = None) -> dict:
                         "max_polygon_vertices": SceneCapacity().max_polygon_vertices,
                         "max_boundary_segments": SceneCapacity().max_boundary_segments}}
     nearest = nearest_train_distances(train, test)
-    out["disjointness"] = {"floor_m": float(doc.get("generation", {}).get("disjointness_floor_m", DISJOINTNESS_FLOOR_M)),
+    floor_m = doc.get("generation", {}).get("disjointness_floor_m", DISJOINTNESS_FLOOR_M)
+    out["disjointness"] = {"floor_m": float(floor_m),
                            "min_nearest_train_m": float(nearest.min()),
                            "median_nearest_train_m": float(np.median(nearest))}
     if name == "factorial":

@@ -178,7 +178,8 @@ def check_analytic_feasibility(scene: Scene, grid: GeodesicGrid, config: Validit
         return CheckResult("analytic_feasibility", False, "no approach pose connects to the target")
     pose, connection = found
     return CheckResult("analytic_feasibility", True,
-                       f"approach {np.round(pose, 3).tolist()} connects ({'forward' if connection.forward else 'reverse'},"
+                       f"approach {np.round(pose, 3).tolist()} connects "
+                       f"({'forward' if connection.forward else 'reverse'},"
                        f" L_H = {connection.length:.2f} m)")
 
 

@@ -140,8 +140,8 @@ def _print_summary(train_sample: int) -> dict[str, Any]:
               "train": summarize(train_clips, train_stats)}
     print(f"site {site.name}: {site.n_edges} boundary edges (observation slots "
           f"{SITE_OBSERVATION.max_boundary_segments}), {len(site.spots)} spots ("
-          + ", ".join(f"{k} {sum(s.kind == k for s in site.spots)}" for k in ("reverse", "forward", "parallel",
-                                                                               "angled")) + ")")
+          + ", ".join(f"{k} {sum(s.kind == k for s in site.spots)}"
+                      for k in ("reverse", "forward", "parallel", "angled")) + ")")
     print(f"splits: train {N_CLIPS['train']} clips (seeds from {SEED_BASE['train']}, generated on demand), "
           f"eval {len(eval_clips)} clips (seeds from {SEED_BASE['eval']}, shipped {EVAL_PATH.name})")
     for line in _summary_lines("eval", result["eval"]):

@@ -88,7 +88,8 @@ def rect_inside_boundary(corners: np.ndarray, verts: np.ndarray, n: int) -> bool
 @njit(cache=True, error_model="numpy", inline="always")
 def footprint_valid(geo, k: int, x: float, y: float, th: float, local: np.ndarray, corners: np.ndarray) -> bool:
     """Footprint convention for the vehicle rectangle ``local`` (4, 2) at pose (x, y, θ); ``corners`` is scratch."""
-    boundary, n_boundary, poly, poly_nv, n_poly, aabb, circle, n_circle = geo[0], geo[1], geo[2], geo[3], geo[4], geo[5], geo[6], geo[7]
+    boundary, n_boundary, poly, poly_nv = geo[0], geo[1], geo[2], geo[3]
+    n_poly, aabb, circle, n_circle = geo[4], geo[5], geo[6], geo[7]
     footprint_corners(x, y, th, local, corners)
     if not rect_inside_boundary(corners, boundary[k], n_boundary[k]):
         return False

@@ -1,7 +1,7 @@
 """Compiled 2-D geometry kernels: strict point-in-polygon, segment intersection, ray casting, footprint tests.
 
-Each kernel is a short ``@njit(cache=True, error_model="numpy")`` function over arrays and scalars, tested against shapely in
-``tests/np_sim/kernels/test_geometry.py``. "Strict" means exact, zero tolerance (paper App. A, "strict,
+Each kernel is a short ``@njit(cache=True, error_model="numpy")`` function over arrays and scalars, tested against
+shapely in ``tests/np_sim/kernels/test_geometry.py``. "Strict" means exact, zero tolerance (paper App. A, "strict,
 zero-tolerance segment-bound tests"): a point on a polygon edge is neither inside nor outside (it is *on* the
 polygon); a ray hits a segment when the segment parameter lies in [0, 1] exactly — no epsilon widens or shrinks
 the bounds, so a beam through a polygon corner hits it — and the ray parameter is strictly positive (the ray's

@@ -117,7 +117,7 @@ def test_exact_rule_section_counts_successes_that_also_pass_the_exact_rule(tmp_p
     def rows(pairs):  # (success, exact) per episode
         return [{"key": ("s", j), "success": ok, "exact": exact} for j, (ok, exact) in enumerate(pairs)]
     fixed = ArmResult(Arm("Fixed", "f"), {0: rows([(1, 1), (1, 1), (1, 0), (0, 0)]),
-                                         1: rows([(1, 1), (1, 1), (1, 1), (0, 0)])})
+                                          1: rows([(1, 1), (1, 1), (1, 1), (0, 0)])})
     old = ArmResult(Arm("Old", "o"), {0: rows([(1, None), (1, None)])})  # records written before the column
     same = ArmResult(Arm("Reference", "f"), fixed.records)  # another table's row on the same records
     lines = exact_rule_section({"tab:a": [fixed, old], "tab:b": [fixed, same]})
@@ -225,7 +225,7 @@ def test_a_finished_adapted_hope_run_is_read_from_final_pt_and_its_planner_recor
     (killed / "progress_settings.json").unlink()
     (killed / "table.md").write_text("| a |")
     assert measure(staged_arm, runs, 1, False, {}).missing[0].endswith("holds an interrupted evaluation (remove it "
-                                                                      "to re-run)")
+                                                                       "to re-run)")
     (killed / "table.md").unlink()
     killed.rmdir()
     argv = evaluation_argv(staged_arm, runs[("factorial_hope", 0)], seed0 / "eval_factorial_staged")

@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+from functools import partial
 from pathlib import Path
 
 import pytest
@@ -325,6 +326,14 @@ def _wait(condition, timeout: float, what: str) -> None:
         time.sleep(0.2)
 
 
+def _finished_tiny_run(root: Path, name: str) -> bool:
+    return len(_rows(root / name)) == 2 and (root / name / "best.pt").exists()
+
+
+def _midway_tiny_run(root: Path, name: str) -> bool:
+    return len(_rows(root / name)) == 1 and (root / name / "snapshot.pt").exists()
+
+
 def test_killed_sweep_finishes_only_what_was_unfinished(tmp_path):
     pytest.importorskip("ray")
     plan, root = _plan(tmp_path, TINY), tmp_path / "runs"
@@ -334,8 +343,8 @@ def test_killed_sweep_finishes_only_what_was_unfinished(tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"} | {"PYTHONPATH": str(REPO)}
     sweep = subprocess.Popen(argv, cwd=REPO, env=env, start_new_session=True, stdout=subprocess.DEVNULL,
                              stderr=subprocess.DEVNULL)
-    finished = lambda n: len(_rows(root / n)) == 2 and (root / n / "best.pt").exists()  # noqa: E731
-    midway = lambda n: len(_rows(root / n)) == 1 and (root / n / "snapshot.pt").exists()  # noqa: E731
+    finished = partial(_finished_tiny_run, root)
+    midway = partial(_midway_tiny_run, root)
     ours = {(root / n).resolve() for n in names}
     try:
         _wait(lambda: any(map(finished, names)) and any(map(midway, names)), 600, "one finished and one midway run")

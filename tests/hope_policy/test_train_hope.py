@@ -23,6 +23,12 @@ from np_policy.checkpoint import CheckpointError
 from np_sim.stop_request import TrainingStopped
 
 TIMING = ("collect_s", "update_s")
+
+
+def _without_timing(row: dict) -> dict:
+    return {k: v for k, v in row.items() if k not in TIMING}
+
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -48,8 +54,7 @@ def test_resume_at_an_update_boundary_is_bit_for_bit_the_uninterrupted_run(strai
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
     rows = train(tiny_config(), tmp_path, resume=True, progress=False, max_updates=2)
     assert [r["update"] for r in rows] == [1, 2]
-    strip = lambda r: {k: v for k, v in r.items() if k not in TIMING}  # noqa: E731
-    assert [strip(r) for r in rows] == [strip(r) for r in straight_rows]
+    assert [_without_timing(r) for r in rows] == [_without_timing(r) for r in straight_rows]
     a, b = load_hope_checkpoint(straight / "snapshot.pt"), load_hope_checkpoint(tmp_path / "snapshot.pt")
     assert a["updates"] == b["updates"] == 2
     for key in a["model"]:
@@ -78,8 +83,7 @@ def test_sigusr1_stops_a_run_after_its_update_with_a_snapshot_and_the_resume_rep
     assert load_hope_checkpoint(tmp_path / "snapshot.pt")["updates"] == 1 and len(json_rows(tmp_path)) == 1
     monkeypatch.setattr(HopeTrainer, "step", real_step)
     rows = train(config, tmp_path, resume=True, progress=False, max_updates=2)
-    strip = lambda r: {k: v for k, v in r.items() if k not in TIMING}  # noqa: E731
-    assert [strip(r) for r in rows] == [strip(r) for r in straight_rows]
+    assert [_without_timing(r) for r in rows] == [_without_timing(r) for r in straight_rows]
 
 
 def test_a_run_writes_its_files_and_stops_after_its_episode_budget(tmp_path):

@@ -170,8 +170,9 @@ def test_a_site_checkpoint_is_refused_for_factorial_scenes_with_both_layouts_nam
         NeuralParkerPlanner.from_checkpoint(path, benchmark="factorial")
     message = str(info.value)
     assert message.startswith(f"{path}: its observation layout (trained on 'site': 10 obstacles x 5 vertices")
-    assert "no LiDAR" in message and "benchmark 'factorial' (20 obstacles x 8 vertices, 10 boundary segments, " \
-                                      "LiDAR 120 beams to 10.0 m)" in message
+    assert "no LiDAR" in message
+    assert ("benchmark 'factorial' (20 obstacles x 8 vertices, 10 boundary segments, LiDAR 120 beams to 10.0 m)"
+            in message)
     assert "observation.use_lidar: checkpoint has False, expected True" in message
 
 

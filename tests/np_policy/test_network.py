@@ -20,7 +20,8 @@ CONFIGS = {
     "no_lidar": ObservationConfig(use_lidar=False),
     "ego_lidar": ObservationConfig(use_obstacles=False, use_boundary=False),
 }
-OPEN_LOT = {"boundary": [[-20, -25], [20, -25], [20, 25], [-20, 25]], "obstacles": [], "target": [0.0, 0.0, math.pi / 2]}
+OPEN_LOT = {"boundary": [[-20, -25], [20, -25], [20, 25], [-20, 25]], "obstacles": [],
+            "target": [0.0, 0.0, math.pi / 2]}
 
 
 def make_obs(config: ObservationConfig, batch: int, used_obstacles: int = 3, used_segments: int = 4, seed: int = 0):

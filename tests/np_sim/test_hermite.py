@@ -222,7 +222,7 @@ def test_centred_variant_tries_the_target_aligned_candidate_first():
     assert abs(end_t[0]) < 1e-12 and abs(end_t[2] - math.pi / 2) < 1e-12
     # a block reaching right of the approach line: the (0 m, 90°) candidate passes through it, a later one does not
     scene = Scene.from_dict(dict(OPEN_LOT, obstacles=[{"polygon": [[-1.0, -2.0], [0.05, -2.0], [0.05, -0.95],
-                                                                    [-1.0, -0.95]]}]))
+                                                                   [-1.0, -0.95]]}]))
     blocked = connect(scene, start, 0.0, "fixed", config=centred)
     assert blocked is not None and blocked.index != 0
     assert blocked.index == _brute_force_selection(scene, start, 0.0, "fixed", centred)[0]

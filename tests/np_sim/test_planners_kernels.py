@@ -19,7 +19,7 @@ from np_sim.benchmarks import load_benchmark
 from np_sim.planners.heap import heap_pop, heap_push
 from np_sim.kernels.collision import point_valid
 from np_sim.planners.heuristic import (boundary_cells, free_cells_inside, grid_dijkstra, grid_distance, holonomic_grid,
-                                      lazy_grid)
+                                       lazy_grid)
 from np_sim.planners.search_kernels import heuristic, heuristic_bound, lattice_cell, polyline_distance
 from np_sim.scene_arrays import packed_scene
 

@@ -92,7 +92,7 @@ def _corner_triangle(apex, direction, size):
     dx, dy = direction
     base = (ax + size * dx, ay + size * dy)
     return {"polygon": [list(apex), [base[0] - 0.3 * size * dy, base[1] + 0.3 * size * dx],
-                                            [base[0] + 0.3 * size * dy, base[1] - 0.3 * size * dx]]}
+                        [base[0] + 0.3 * size * dy, base[1] - 0.3 * size * dx]]}
 
 
 def test_a_corner_between_two_paper_samples_passes_the_paper_rule_and_fails_the_exact_one():

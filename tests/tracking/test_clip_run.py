@@ -69,7 +69,7 @@ def test_a_plan_the_tracker_refuses_counts_as_a_failed_call_and_is_retried():
     clip = next(c for c in load_clips("eval") if c.name == "eval-1000016")
     run = run_clip(clip, SharpFirst(2))
     assert [(c.success, c.rejected) for c in run.calls[:3]] == [(True, "steering_limit"), (True, "steering_limit"),
-                                                                 (True, "")]
+                                                                (True, "")]
     assert not any(c.rejected for c in run.calls[3:])
     assert run.footprint_success, run.record.detail
     assert np.allclose(run.trajectory[run.trajectory[:, 0] < 1.0, 1:], clip.start)  # waited, not driven sharp

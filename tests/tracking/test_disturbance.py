@@ -266,7 +266,7 @@ def test_a_longer_body_lengthens_the_chassis_box_at_both_ends_and_nothing_else()
 
 def test_contacts_are_measured_with_the_longer_body_and_the_controllers_keep_the_nominal_mass():
     config = dataclasses.replace(TrackerConfig(), world=dataclasses.replace(TrackerConfig().world,
-                                                                             solid_obstacles=False))
+                                                                            solid_obstacles=False))
     front = config.vehicle.wheelbase_m + config.vehicle.front_overhang_m
     wall = [[front + 0.1, -3.0], [front + 1.0, -3.0], [front + 1.0, 3.0], [front + 0.1, 3.0]]
     scene = open_scene([-10.0, 0.0, 0.0], obstacles=[{"polygon": wall}])
@@ -287,7 +287,7 @@ def test_the_factor_table_has_three_increasing_levels_and_bad_disturbances_are_r
     spec = TrackerConfig().vehicle
     assert PlantConfig().body(spec) is spec
     for bad, match in (({"factor": "wind", "value": 0.1}, "factor"), ({"factor": "detection_drop", "value": 1.0},
-                                                                       "value"),
+                                                                      "value"),
                        ({"factor": "latency", "value": -0.1}, "value"),
                        ({"factor": "latency", "value": 0.1, "seed": -1}, "seed")):
         with pytest.raises(ConfigError, match=match):

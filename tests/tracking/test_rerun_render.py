@@ -30,7 +30,7 @@ def test_rrd_holds_scene_plan_trajectory_footprint_and_scalars(tmp_path, cusp_pl
     expected = {"/world/scene/boundary", "/world/scene/obstacles", "/world/scene/target", "/world/plan",
                 "/world/executed", "/world/vehicle/footprint", "/world/vehicle/reference_point", "/run/outcome",
                 *(f"/controller/{n}" for n in ("cross_track_m", "heading_error_rad", "steer_curvature_cmd",
-                                                "steer_curvature_ref", "speed_mps", "speed_target_mps"))}
+                                               "steer_curvature_ref", "speed_mps", "speed_target_mps"))}
     assert expected <= _entities(path)
 
 

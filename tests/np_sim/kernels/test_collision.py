@@ -121,7 +121,8 @@ def _pose_putting(rng, vertex, local_pt) -> np.ndarray:
     """A pose (random heading) whose footprint has the world point ``vertex`` at the vehicle-frame ``local_pt``."""
     th = rng.uniform(-math.pi, math.pi)
     c, s = math.cos(th), math.sin(th)
-    return np.array([vertex[0] - (c * local_pt[0] - s * local_pt[1]), vertex[1] - (s * local_pt[0] + c * local_pt[1]), th])
+    return np.array([vertex[0] - (c * local_pt[0] - s * local_pt[1]),
+                     vertex[1] - (s * local_pt[0] + c * local_pt[1]), th])
 
 
 def query_poses(rng, scene: Scene, n: int) -> np.ndarray:
