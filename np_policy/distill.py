@@ -65,6 +65,7 @@ class _Replay:
         self.actions, self.seen = np.asarray(actions, np.float64), []
 
     def batch(self, obs: np.ndarray) -> np.ndarray:
+        """(1, 2) next given action for the observation batch ``obs`` (its first row is kept)."""
         if len(self.seen) == len(self.actions):
             raise _Exhausted
         self.seen.append(np.array(obs[0], np.float32))

@@ -115,6 +115,8 @@ class ConnectorConfig:
 
     @property
     def n_candidates(self) -> int:
+        """How many terminal Hermite candidates one connection tries (paper §III-D: offsets × headings, and with
+        the ensemble × the scale pairs)."""
         n_scales = len(self.scales) ** 2 if self.mode == "ensemble" else 1
         return len(self.offsets_m) * len(self.headings_deg) * n_scales
 

@@ -36,6 +36,7 @@ class SceneArrays:
 
     @property
     def geometry(self) -> tuple:
+        """The arrays the compiled kernels take, in their order (every field but ``targets``)."""
         return (
             self.boundary,
             self.n_boundary,
@@ -51,6 +52,7 @@ class SceneArrays:
 
     @property
     def n_scenes(self) -> int:
+        """M, the number of scenes packed."""
         return int(self.targets.shape[0])
 
 

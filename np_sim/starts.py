@@ -18,6 +18,8 @@ from np_sim.vehicle import VehicleSpec
 
 
 class StartSampler(Protocol):
+    """What an env calls on reset: (n, 3) start poses for the scenes ``scene_indices``, drawn with ``rng``."""
+
     def __call__(self, rng: np.random.Generator, scene_indices: np.ndarray) -> np.ndarray: ...
 
 

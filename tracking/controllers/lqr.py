@@ -64,6 +64,8 @@ class LQRController(LateralController):
         return float(k[0]), float(k[1]), float(k[2])
 
     def steer_curvature(self, state: TrackingState) -> float:
+        """c_ref − K (e_y, e_θ, c − c_ref): the LQR law of ``lqr_gain`` with the gain scheduled on speed and
+        gear."""
         p = state.projection
         k = self.gain(state.speed_mps, state.segment.gear)
         c_ref = p.steer_curvature_ref

@@ -30,6 +30,8 @@ class PurePursuitController(LateralController):
         self.l_min, self.k = config.pure_pursuit.lookahead_min_m, config.pure_pursuit.lookahead_gain_s
 
     def steer_curvature(self, state: TrackingState) -> float:
+        """Pure pursuit's curvature 2·y / d² to the lookahead point (y its lateral offset in the body frame, d its
+        distance), the lookahead growing with speed."""
         pose = state.pose
         gx, gy = lookahead_point(state.segment, state.projection.s + self.l_min + self.k * abs(state.speed_mps))
         dx, dy = gx - pose[0], gy - pose[1]

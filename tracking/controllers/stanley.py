@@ -40,6 +40,7 @@ class StanleyController(LateralController):
         return self._front
 
     def steer_curvature(self, state: TrackingState) -> float:
+        """Commanded steering curvature tan(δ)/L of Stanley's law (class docstring) on the leading axle."""
         L, pose, segment, projection = self.wheelbase_m, state.pose, state.segment, state.projection
         soft = self.k_soft + abs(state.speed_mps)
         if segment.gear > 0:
