@@ -501,7 +501,9 @@ def exact_rule_section(results: dict[str, list[ArmResult]]) -> list[str]:
              "(`np_sim.validate.plan_valid(..., \"exact\", \"reference_point\")`, recorded by every evaluation); a "
              "success that fails it crosses an obstacle edge between two samples. The paper reports only the sampled "
              "rule. Where those crossings lie and how deep they go: [a diagnosis of the Factorial connector rows]"
-             "(results/2026-12-07-exact-rule/README.md).", "",
+             "(results/2026-12-07-exact-rule/README.md); what checking 1,000 points per Hermite candidate instead "
+             "of 100 changes, on validation starts: [Hermite density](results/2026-12-07-hermite-density/README.md).",
+             "",
              "| Row | Seeds | Succ. (sampled rule) | Succ. (also exact) | Successes that pass the exact rule |",
              "|---|---|---|---|---|"]
     measured: dict[tuple[str, str], list[ArmResult]] = {}  # rows of several tables that share their records
