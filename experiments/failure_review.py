@@ -17,8 +17,8 @@ it reads the run back (`tracking.rrd_read.read_run`) and writes into ``STUDY_DIR
   that plan's clearance to the touched object's true outline with the body the simulator drove (a ``body_length``
   disturbance makes it longer: the disturbance's own tracker configuration gives it; ``plan_clearance_nominal_m``
   with the body planned for); whether the planner call that made the plan had a detection of the object and the
-  plan's clearance to it; and the kind of failure (`experiments.review_case.KINDS`; a run without a contact by its
-  reason, e.g. 'timeout');
+  plan's clearance to it where the plan meets the object; and the kind of failure
+  (`experiments.review_case.KINDS`; a run without a contact by its reason, e.g. 'timeout');
 * ``<factor>.png``: a panel per level × planner around the first contact (`experiments.review_figure`).
 
 Only clip studies are reviewed (frozen-start episodes have no planner calls in their recordings).

@@ -1,6 +1,6 @@
 """What one recorded failure shows (`experiments.failure_review`): at the first contact, the plan being followed,
-its clearance to the touched object's true outline and to the planner's detection of it, whether the planner saw
-the object, the tracking error, and a one-phrase kind.
+its clearance to the touched object's true outline and, where it meets that outline, to the planner's detection of
+it, whether the planner saw the object, the tracking error, and a one-phrase kind.
 
 Clearances are those of the *planned body*: the body the simulator drove (a ``body_length`` disturbance makes it
 longer than the planned `VehicleSpec`) placed at every pose of the plan; 0 where it overlaps. A moving object's
@@ -28,8 +28,10 @@ KINDS = {
     "left the plan": f"the plan's own body clears the touched object's true outline by at least {SLACK_M} m: the "
                      "vehicle left the plan (a lateral error, an overshoot or a turned body)",
     "unseen": "the plan passes the object within the slack, and the call that made the plan had no detection of it",
-    "detection off": "the plan clears the object's detection by at least the slack, but not its true outline",
-    "planned through": "the plan passes within the slack of the object's detection (or the map's boundary) too",
+    "detection off": "where the plan passes within the slack of the object's true outline, it clears the object's "
+                     "detection by at least the slack",
+    "planned through": "where the plan passes within the slack of the object's true outline, it passes within the "
+                       "slack of its detection (or of the map's boundary) too",
 }
 """The kinds of a contact failure, in the order they are decided; a run without a contact is labelled by its
 reason ('timeout', 'not parked', ...)."""
@@ -99,7 +101,10 @@ class ContactReview:
     """With the body the planner planned for (differs under a ``body_length`` disturbance)."""
     seen: str
     detection_clearance_m: float
-    """nan when the planner had no detection of the object ('no'); the boundary's clearance for a wall."""
+    """The plan's least clearance to the planner's detection of the object at the poses where the plan passes within
+    `SLACK_M` of its true outline (at every pose where it passes no closer): whether the plan met the object where
+    it also met the detection. nan when the planner had no detection of it ('no'); the boundary's clearance for a
+    wall."""
     kind: str
 
 
@@ -123,12 +128,16 @@ def review_contact(run: RecordedRun, body: VehicleSpec, touched_object: str,
         raise LookupError(f"{run.name}: contact at t = {t:.2f} s before any plan was followed")
     call = run.call_of(plan)
     outline = true_outline(run, contact.geom, t)
-    plan_clearance = clearance(plan.poses, body, outline)
+    placed = planned_bodies(plan.poses, body)
+    to_truth = shapely.distance(placed, outline)
+    plan_clearance = float(to_truth.min())
     if touched_object == "boundary":
         seen, detection_clearance = "map", plan_clearance
     elif touched_object in call.labels:
         detection = shapely.Polygon(call.detections[call.labels.index(touched_object)])
-        seen, detection_clearance = "yes", clearance(plan.poses, body, detection)
+        near = to_truth < SLACK_M  # where the plan meets the object; the whole plan where it never does
+        to_detection = shapely.distance(placed[near] if near.any() else placed, detection)
+        seen, detection_clearance = "yes", float(to_detection.min())
     else:
         seen, detection_clearance = "no", math.nan
     then, worst = _cross_track(run, t)

@@ -95,6 +95,19 @@ def test_seen_detection_off_and_unseen_read_from_the_plans_call():
     assert unseen.seen == "no" and math.isnan(unseen.detection_clearance_m) and unseen.kind == "unseen"
 
 
+def test_the_detection_counts_where_the_plan_meets_the_object_not_elsewhere():
+    # the true box reaches the body's side (0.971) while the reference point is below x = 1 + 0.929; its detection,
+    # shifted 14 m ahead, is 0.03 m beyond the front end at the plan's end (12 + 3.76), over 9 m from those poses
+    run = _recording(truth=_box(0, 1, 0.95, 1.95), detection=_box(15.79, 16.79, -0.5, 0.5), plan_to=12.0)
+    review = review_contact(run, CAR, "vehicle 3")
+    assert clearance(run.plans[0].poses, CAR, shapely.Polygon(_box(15.79, 16.79, -0.5, 0.5))) == pytest.approx(0.03)
+    assert review.plan_clearance_m == 0.0 and review.detection_clearance_m > 9.0
+    assert review.kind == "detection off"
+    beside = review_contact(_recording(truth=_box(0, 1, 0.95, 1.95), detection=_box(0, 1, 0.99, 1.99),
+                                       plan_to=12.0), CAR, "vehicle 3")
+    assert beside.detection_clearance_m == pytest.approx(0.99 - 0.971) and beside.kind == "planned through"
+
+
 def test_the_longer_body_turns_a_clear_plan_into_one_planned_through():
     box = _box(10.0, 11.0, -0.5, 0.5)  # the plan's front end reaches 6 + 3.76 = 9.76, the longer body's 9.995
     run = _recording(truth=box, detection=box)
