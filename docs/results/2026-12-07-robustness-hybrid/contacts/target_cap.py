@@ -21,7 +21,7 @@ import numpy as np
 import shapely
 
 from experiments.failure_review import bodies, load_study
-from experiments.review_case import SLACK_M, clearance, true_outline
+from experiments.review_case import SLACK_M, clearance, planned_bodies, true_outline
 from tracking.rrd_read import read_run
 
 
@@ -45,8 +45,8 @@ def main(folder: Path) -> None:
     touched = row["first_contact_object"]
     detection = shapely.Polygon(call.detections[call.labels.index(touched)])
     truth = true_outline(run, contact.geom, contact.time_s)
-    to_detection = np.array([clearance(p[None], planned, detection) for p in plan.poses])
-    to_truth = np.array([clearance(p[None], planned, truth) for p in plan.poses])
+    placed = planned_bodies(plan.poses, planned)
+    to_detection, to_truth = shapely.distance(placed, detection), shapely.distance(placed, truth)
     ring = shapely.LinearRing(run.boundary)
     print(f"{recording.name}: first contact at {contact.time_s:.2f} s with {touched} ({contact.geom})")
     print(f"followed plan made at {plan.time_s:.2f} s by a '{stage}' call; {len(plan.poses)} poses")
