@@ -8,8 +8,9 @@ in-loop Hermite ensemble, then per epoch collect 16,384 transitions at a time fr
 least 60,000 steps are in, after each collect run 10 shuffled passes of minibatches of 8,192 (Tianshou's on-policy
 trainer semantics, spec §6), then score 32 full-range training-distribution episodes with the deterministic policy
 for checkpoint selection (never a frozen evaluation episode). Every epoch appends a line to ``metrics.jsonl``
-(statistics, and its wall-clock split into ``collect_s``, ``update_s`` and ``selection_s``) and redraws
-``curves.png``; TensorBoard event files beside it hold the same scalars (``--no-tensorboard`` leaves them out);
+(statistics, and its wall-clock split into ``collect_s``, ``update_s`` and ``selection_s``); ``curves.png`` is
+redrawn at most once a minute and at each snapshot and the end; TensorBoard event files beside it hold the same
+scalars (``--no-tensorboard`` leaves them out);
 ``best.pt`` holds the selected policy; ``snapshot.pt`` (every ``ppo.snapshot_every_epochs``, 20 by default and 10 in
 the sweep's recipe, and at the last epoch of a run stopped early with ``--epochs``) holds everything needed to
 resume exactly — on CPU a resumed run gives the same curve as an uninterrupted one. A run whose last metrics row is
@@ -66,6 +67,9 @@ RUN_FILES = ("metrics.jsonl", "snapshot.pt", "best.pt")
 EVENT_FILES = "events.out.tfevents.*"
 """The run's TensorBoard event files (a glob pattern)."""
 REPLACED_FILES = (*RUN_FILES, "curves.png", "config.json", PROVENANCE_FILE, EVENT_FILES)
+# curves.png is redrawn at most this often, and at every snapshot and at the run's end: drawing it every epoch cost
+# about 15% of a short run's time (TensorBoard's event files carry every epoch as it ends)
+CURVES_EVERY_S = 60.0
 """What ``overwrite`` removes before a new run starts in an existing run folder: names or glob patterns (the site
 pool is a cache keyed by its settings and stays)."""
 
@@ -530,23 +534,30 @@ def event_writer(out: Path, rows: list[dict[str, Any]], epoch: int) -> Any:
     return writer
 
 
-def _write_epoch(trainer: Trainer, out: Path, rows: list[dict[str, Any]], writer: Any, last: int) -> None:
-    """The epoch's files, in an order a kill cannot make lie: ``best.pt`` and ``curves.png`` first, then the
-    metrics row (a row means its epoch is written; a last row at ``ppo.epochs`` means the run is finished) and its
-    TensorBoard scalars, then the snapshot: written every ``snapshot_every_epochs`` and at ``last``, removed once
-    the run is finished."""
+def _write_epoch(trainer: Trainer, out: Path, rows: list[dict[str, Any]], writer: Any, last: int,
+                 curves_due: bool) -> bool:
+    """The epoch's files, in an order a kill cannot make lie: ``best.pt`` and ``curves.png`` first (the curves when
+    ``curves_due``, at a snapshot or at the run's end), then the metrics row (a row means its epoch is written; a
+    last row at ``ppo.epochs`` means the run is finished) and its TensorBoard scalars, then the snapshot: written
+    every ``snapshot_every_epochs`` and at ``last``, removed once the run is finished. Returns whether it drew the
+    curves."""
     row, ppo = rows[-1], trainer.config.ppo
+    finished = trainer.epoch == ppo.epochs
+    snapshot = not finished and (trainer.epoch % ppo.snapshot_every_epochs == 0 or trainer.epoch == last)
     if row["selection_reward"] > trainer.best_reward:
         trainer.best_reward = row["selection_reward"]
         save_checkpoint(out / "best.pt", trainer.checkpoint_payload(row["selection_reward"]))
-    _plot_curves(rows, out / "curves.png", ppo.selection_episodes)
+    draw = curves_due or finished or snapshot
+    if draw:
+        _plot_curves(rows, out / "curves.png", ppo.selection_episodes)
     write_metrics(out / "metrics.jsonl", rows)
     if writer is not None:
         log_scalars(writer, row)
-    if trainer.epoch == ppo.epochs:
+    if finished:
         (out / "snapshot.pt").unlink(missing_ok=True)
-    elif trainer.epoch % ppo.snapshot_every_epochs == 0 or trainer.epoch == last:
+    elif snapshot:
         save_checkpoint(out / "snapshot.pt", trainer.state())
+    return draw
 
 
 def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resume: bool = False,
@@ -587,13 +598,16 @@ def train(config: TrainConfig, out: str | Path, epochs: int | None = None, resum
     bar = tqdm(range(trainer.epoch, last), desc="epochs", unit="epoch", disable=not progress,
                initial=trainer.epoch, total=last)
     writer = event_writer(out, rows, trainer.epoch) if tensorboard else None
+    curves_drawn = time.monotonic()
     try:
         with StopRequest() as stop:
             for _ in bar:
                 row = _train_epoch(trainer)
                 rows.append(row)
                 stopping = stop.requested  # read once: a signal during the writes below waits for the next epoch
-                _write_epoch(trainer, out, rows, writer, trainer.epoch if stopping else last)
+                if _write_epoch(trainer, out, rows, writer, trainer.epoch if stopping else last,
+                                curves_due=time.monotonic() - curves_drawn >= CURVES_EVERY_S):
+                    curves_drawn = time.monotonic()
                 bar.set_postfix(steps_s=f"{row['steps_per_s']:,.0f}", ret=f"{row['train_return']:.0f}",
                                 succ=f"{row['train_success']:.2f}", cur=f"{row['curriculum_fraction']:.2f}")
                 if stopping and trainer.epoch < last:

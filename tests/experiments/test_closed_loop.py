@@ -21,19 +21,29 @@ KNOWN_FEASIBLE = "eval-1000016"
 """Hybrid A* (footprint convention) parks this clip without a touch in closed loop (averse start, one reversal)."""
 
 
-@pytest.fixture
-def site_checkpoint(tmp_path):
+TWO_CLIPS = ["--clips", "--clip-names", KNOWN_FEASIBLE, "eval-1000009", "--planners", "neuralparker", "hybrid_astar",
+             "--no-render"]
+
+
+@pytest.fixture(scope="module")
+def site_checkpoint(tmp_path_factory):
     """A randomly initialised (seeded) policy of the paper's site configuration, as a checkpoint file."""
     torch.manual_seed(0)
     config = TrainConfig.from_dict(benchmark_defaults("site"))
     model = ActorCritic(config.env.observation, config.network)
-    return save_checkpoint(tmp_path / "site_random.pt", {"model": model.state_dict(), "config": config.to_dict()})
+    return save_checkpoint(tmp_path_factory.mktemp("site") / "site_random.pt",
+                           {"model": model.state_dict(), "config": config.to_dict()})
 
 
-def test_two_clips_run_end_to_end_and_the_known_feasible_clip_parks(tmp_path, site_checkpoint):
-    out = tmp_path / "run"
-    result = main(["--clips", "--clip-names", KNOWN_FEASIBLE, "eval-1000009", "--planners", "neuralparker",
-                   "hybrid_astar", "--checkpoint", str(site_checkpoint), "--no-render", "--out", str(out)])
+@pytest.fixture(scope="module")
+def two_clip_run(tmp_path_factory, site_checkpoint):
+    """The two clips with the untrained policy and Hybrid A* on two workers: (its folder, what main returned)."""
+    out = tmp_path_factory.mktemp("two_clips") / "run"
+    return out, main(TWO_CLIPS + ["--checkpoint", str(site_checkpoint), "--workers", "2", "--out", str(out)])
+
+
+def test_two_clips_run_end_to_end_and_the_known_feasible_clip_parks(two_clip_run, site_checkpoint):
+    out, result = two_clip_run
     rows = list(csv.DictReader((out / "records.csv").open()))
     assert [(r["clip"], r["planner"]) for r in rows] == [(KNOWN_FEASIBLE, "neuralparker"),
                                                          (KNOWN_FEASIBLE, "hybrid_astar"),
@@ -98,14 +108,13 @@ def test_perception_filter_and_search_margin_reach_the_run(tmp_path):
     assert row["footprint_success"] == "1", row["detail"]
 
 
-def test_two_workers_give_the_records_of_one(tmp_path, site_checkpoint):
-    args = ["--clips", "--clip-names", KNOWN_FEASIBLE, "eval-1000009", "--planners", "neuralparker", "hybrid_astar",
-            "--checkpoint", str(site_checkpoint), "--no-render"]
-    one = main(args + ["--out", str(tmp_path / "one"), "--workers", "1"])["records"]
-    two = main(args + ["--out", str(tmp_path / "two"), "--workers", "2"])["records"]  # hung with fork before
-    assert [(r["clip"], r["planner"]) for r in two] == [(r["clip"], r["planner"]) for r in one]
-    assert [_untimed(r) for r in two] == [_untimed(r) for r in one]  # everything but the wall clock
-    workers = [json.loads((tmp_path / n / "config.json").read_text())["config"]["workers"] for n in ("one", "two")]
+def test_two_workers_give_the_records_of_one(tmp_path, site_checkpoint, two_clip_run):
+    two_out, two = two_clip_run  # two workers hung with fork before
+    one = main(TWO_CLIPS + ["--checkpoint", str(site_checkpoint), "--out", str(tmp_path / "one"), "--workers", "1"])
+    assert [(r["clip"], r["planner"]) for r in two["records"]] == [(r["clip"], r["planner"]) for r in one["records"]]
+    assert [_untimed(r) for r in two["records"]] == [_untimed(r) for r in one["records"]]  # all but the wall clock
+    workers = [json.loads((out / "config.json").read_text())["config"]["workers"] for out in (tmp_path / "one",
+                                                                                              two_out)]
     assert workers == [1, 2]
 
 

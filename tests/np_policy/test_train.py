@@ -112,6 +112,23 @@ def test_cli_writes_metrics_curves_and_checkpoints(finished_run):
     assert {"model", "config", "return_rms", "epoch", "selection_reward"} <= set(best)
 
 
+@pytest.mark.parametrize("every_s, drawn", [(1e9, [2, 3, 4]), (0.0, [1, 2, 3, 4])])
+def test_the_curves_are_redrawn_when_due_and_always_at_a_snapshot_and_the_end(tmp_path, monkeypatch, every_s, drawn):
+    """Four epochs, a snapshot every two, stopped by SIGTERM during epoch 3: snapshots at 2 and 3, the end at 4."""
+    epochs = []
+    plot = train_module._plot_curves
+    monkeypatch.setattr(train_module, "_plot_curves", lambda rows, *a: (epochs.append(rows[-1]["epoch"]),
+                                                                        plot(rows, *a)))
+    monkeypatch.setattr(train_module, "CURVES_EVERY_S", every_s)
+    monkeypatch.setattr(train_module, "_train_epoch",
+                        signal_after(train_module._train_epoch, signal.SIGTERM, lambda t: t.epoch == 3))
+    config, run = TrainConfig.from_dict(TINY), tmp_path / "run"
+    with guarded_stop_signals(), pytest.raises(train_module.TrainingStopped):
+        train(config, run, progress=False, tensorboard=False)
+    train(config, run, resume=True, progress=False, tensorboard=False)
+    assert epochs == drawn and (run / "curves.png").stat().st_size > 0
+
+
 def test_checkpoint_errors_name_the_file_and_the_difference(tmp_path):
     with pytest.raises(CheckpointError, match="checkpoint file not found"):
         load_checkpoint(tmp_path / "nope.pt")
