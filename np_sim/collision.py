@@ -26,7 +26,7 @@ def path_valid(scene: Scene, poses, convention: Convention = "reference_point",
     """
     if convention not in ("reference_point", "footprint"):
         raise ConfigError(f"path_valid: convention must be 'reference_point' or 'footprint', got {convention!r}")
-    p = np.asarray(poses, dtype=float)
+    p = np.array(poses, dtype=float)  # a writeable copy: numba compiles a read-only array as another type
     if p.ndim != 2 or p.shape[1] not in (2, 3):
         raise ValueError(f"path_valid: expected poses of shape (N, 3) (or (N, 2) for reference points), got {p.shape}")
     if p.shape[1] == 2:

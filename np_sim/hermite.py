@@ -128,7 +128,7 @@ def connect(
     if config.mode != mode:
         raise ConfigError(f"connect: mode={mode!r} disagrees with config.mode={config.mode!r}")
     vehicle = VehicleSpec() if vehicle is None else vehicle
-    target = np.asarray(scene.target, float)
+    target = np.array(scene.target, float)  # a writeable copy: numba compiles a read-only array as another type
     pose_t = pose_to_target_frame(np.asarray(pose, float), target)
     if config.heading_gate and not math.sin(pose_t[2]) > 0.0:
         return None

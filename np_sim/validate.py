@@ -104,7 +104,7 @@ def validate_plan(scene: Scene, plan: Plan, rule: str = "exact", *, convention: 
     local = (VehicleSpec() if vehicle is None else vehicle).footprint_local()
     footprint = convention == "footprint"
     arcs = np.asarray(plan.arcs, float).reshape(-1, 2)
-    start = np.asarray(plan.start, float)
+    start = np.array(plan.start, float)  # a writeable copy: numba compiles a read-only array as another type
     if start.shape != (3,) or not (np.all(np.isfinite(start)) and np.all(np.isfinite(arcs))):
         raise ValueError(f"validate_plan: expected a finite start [x, y, θ] and finite (κ, l) arcs, got start "
                          f"{start.tolist()} and {len(arcs)} arcs ({int(np.sum(~np.isfinite(arcs)))} non-finite values)")

@@ -97,7 +97,7 @@ def boundary_cells(boundary: np.ndarray, origin_x: float, origin_y: float, cell_
                    ny: int) -> np.ndarray:
     """``inside_cells`` of ``boundary`` (its n × 2 vertices) on this grid, computed once per boundary and grid: the
     boundary test is most of the free-cell work on a site lot, whose boundary stays while its objects move."""
-    verts = np.ascontiguousarray(boundary, dtype=float)
+    verts = np.array(boundary, dtype=float, order="C")  # writeable: numba compiles a read-only array apart
     key = (verts.tobytes(), len(verts), origin_x, origin_y, cell_m, nx, ny)
     mask = _boundary_cells.get(key)
     if mask is None:

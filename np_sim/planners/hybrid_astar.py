@@ -215,7 +215,7 @@ class HybridAStar:
     def _search(self, scene: Scene, start, guide: np.ndarray, region_m: float) -> Plan:
         t0 = time.perf_counter()
         c = self.config
-        p = np.asarray(start, dtype=float)
+        p = np.array(start, dtype=float)  # a writeable copy: numba compiles a read-only array as another type
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise ValueError(f"HybridAStar.plan: start must be a finite [x, y, θ] of shape (3,), got {start!r}")
         if not isinstance(scene, Scene):
