@@ -67,11 +67,11 @@ RUN_FILES = ("metrics.jsonl", "snapshot.pt", "best.pt")
 EVENT_FILES = "events.out.tfevents.*"
 """The run's TensorBoard event files (a glob pattern)."""
 REPLACED_FILES = (*RUN_FILES, "curves.png", "config.json", PROVENANCE_FILE, EVENT_FILES)
-# curves.png is redrawn at most this often, and at every snapshot and at the run's end: drawing it every epoch cost
-# about 15% of a short run's time (TensorBoard's event files carry every epoch as it ends)
-CURVES_EVERY_S = 60.0
 """What ``overwrite`` removes before a new run starts in an existing run folder: names or glob patterns (the site
 pool is a cache keyed by its settings and stays)."""
+CURVES_EVERY_S = 60.0
+"""Seconds between redraws of ``curves.png`` at the least; it is also drawn at every snapshot and at the run's end.
+Drawing it every epoch cost about 15% of a short run's time; TensorBoard's event files carry every epoch."""
 
 
 def merge_config(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
