@@ -20,7 +20,8 @@ the fusion and the actor run per arc.
 
 Layout: the weights are flattened into two typed lists, matrices (in × out, so ``x @ W``) and vectors (biases,
 LayerNorm gains and offsets), in exactly the order ``_mean_action`` consumes them; ``_export`` is the one place
-that order is written on the Python side.
+that order is written on the Python side. The lists are filled inside a cached kernel from one flat buffer: a typed
+list's ``append`` called from Python compiles afresh in every process (about 2 s, numba does not cache it).
 """
 
 from __future__ import annotations
@@ -207,16 +208,17 @@ def _mean_rollout(geo, targets, static_obs, S, P, local, b_ranges, off_c, off_s,
 
 
 def _export(model: ActorCritic) -> tuple[List, List]:
-    """The weights in ``_mean_action``'s consumption order (matrices transposed to in × out)."""
-    mats, vecs = List(), List()
+    """The weights in ``_mean_action``'s consumption order (matrices transposed to in × out), as the two typed
+    lists the kernels take, built by ``_typed_lists`` from one flat buffer (module docstring)."""
+    mats, vecs = [], []
 
     def dense(layer: nn.Linear) -> None:
-        mats.append(np.ascontiguousarray(layer.weight.detach().numpy().T, dtype=np.float32))
-        vecs.append(np.ascontiguousarray(layer.bias.detach().numpy(), dtype=np.float32))
+        mats.append(layer.weight.detach().numpy().T)
+        vecs.append(layer.bias.detach().numpy())
 
     def norm(layer: nn.LayerNorm) -> None:
-        vecs.append(layer.weight.detach().numpy().astype(np.float32))
-        vecs.append(layer.bias.detach().numpy().astype(np.float32))
+        vecs.append(layer.weight.detach().numpy())
+        vecs.append(layer.bias.detach().numpy())
 
     def block(b: SelfAttentionBlock) -> None:
         dense(b.qkv), dense(b.out), norm(b.norm1), dense(b.ff[0]), dense(b.ff[2]), norm(b.norm2)
@@ -231,13 +233,32 @@ def _export(model: ActorCritic) -> tuple[List, List]:
         if stream is not None:
             mlp(stream)
     if enc.n_slots:
-        mats.append(enc.slot_position.detach().numpy().astype(np.float32).copy())
+        mats.append(enc.slot_position.detach().numpy())
         block(enc.geometry_attention)
         dense(enc.geometry_summary)
     for b in enc.fusion:
         block(b)
     dense(enc.project)
     mlp(model.actor)
+    flat = np.concatenate([a.astype(np.float32).ravel() for a in mats + vecs])
+    shapes = np.array([a.shape for a in mats] + [(1, a.shape[0]) for a in vecs], np.int64)
+    return _typed_lists(flat, shapes, len(mats))
+
+
+@njit(cache=True, error_model="numpy")
+def _typed_lists(flat, shapes, n_mats):
+    """Split ``flat`` (float32) into the matrices ``shapes[:n_mats]`` (rows, cols) and the vectors
+    ``shapes[n_mats:]`` (1, length), in order, each its own C-contiguous copy: (matrices, vectors)."""
+    mats, vecs = List(), List()
+    start = 0
+    for i in range(shapes.shape[0]):
+        rows, cols = shapes[i, 0], shapes[i, 1]
+        block = flat[start:start + rows * cols].copy()
+        start += rows * cols
+        if i < n_mats:
+            mats.append(block.reshape(rows, cols))
+        else:
+            vecs.append(block)
     return mats, vecs
 
 
