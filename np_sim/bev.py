@@ -125,7 +125,8 @@ def fill_polygon(label: np.ndarray, u: np.ndarray, v: np.ndarray, n: int, value:
         for p in range(0, m - 1, 2):
             i0 = max(0, int(math.ceil(xs[p] - 0.5)))
             i1 = min(cols, int(math.ceil(xs[p + 1] - 0.5)))
-            label[j, i0:i1] = value
+            if i1 > i0:  # a span wholly left of the grid has i1 < 0, which a slice would count from the right
+                label[j, i0:i1] = value
 
 
 @njit(cache=True, error_model="numpy")
@@ -142,7 +143,8 @@ def fill_disc(label: np.ndarray, cu: float, cv: float, r: float, value: int) -> 
         half = math.sqrt(r * r - dv * dv)
         i0 = max(0, int(math.floor(cu - half - 0.5)) + 1)
         i1 = min(cols, int(math.ceil(cu + half - 0.5)))
-        label[j, i0:i1] = value
+        if i1 > i0:  # as in fill_polygon: never a negative slice end
+            label[j, i0:i1] = value
 
 
 @njit(cache=True, error_model="numpy")

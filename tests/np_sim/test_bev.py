@@ -85,6 +85,37 @@ def test_each_pixel_is_the_mean_of_its_sample_points_against_shapely(seed):
     np.testing.assert_array_equal(image.transpose(1, 2, 0), expected)
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_obstacles_across_and_beyond_every_image_edge_are_drawn_as_shapely_sees_them(seed):
+    """Obstacles anywhere around the ego: inside the image, across any of its edges and wholly beyond them (a
+    polygon wholly behind the ego once painted a band across its rows)."""
+    rng = np.random.default_rng(200 + seed)
+    pose = np.array([rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-np.pi, np.pi)])
+    half = CONFIG.extent_m / 2
+
+    def away_from_the_ego():
+        while True:
+            xy = rng.uniform(-2 * half, 2 * half, 2)
+            if np.abs(xy).max() > 6.0:
+                return xy
+
+    polygons = [star_polygon(rng, local_to_world(pose, away_from_the_ego()), 2.5, 9) for _ in range(8)]
+    circles = [[*local_to_world(pose, away_from_the_ego()), rng.uniform(0.3, 2.0)] for _ in range(4)]
+    obstacles = [{"polygon": p.tolist()} for p in polygons] + [{"circle": c} for c in circles]
+    image = render_bev(scene(obstacles), pose)
+
+    points = sample_points_world(pose)
+    inside = np.zeros(points.shape[:-1], bool)
+    for p in polygons:  # even-odd over the union is the union here: the obstacles are drawn one over another
+        inside |= shapely.contains_xy(Polygon(p), points[..., 0], points[..., 1])
+    for cx, cy, r in circles:
+        inside |= np.hypot(points[..., 0] - cx, points[..., 1] - cy) < r
+    on_ego = shapely.contains_xy(Polygon(VehicleSpec().footprint(pose)), points[..., 0], points[..., 1])
+    palette = np.array([CONFIG.background_rgb, CONFIG.obstacle_rgb, CONFIG.ego_rgb], float)
+    expected = np.floor(palette[np.where(on_ego, 2, inside.astype(int))].mean(axis=2) + 0.5).astype(np.uint8)
+    np.testing.assert_array_equal(image.transpose(1, 2, 0), expected)
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_covered_area_matches_shapely_area_within_a_boundary_band(seed):
     """Σ grey/150 over the pixels, in m², is the polygon's area up to one sample spacing along its perimeter and
