@@ -114,9 +114,11 @@ class Configuration:
 
 _LOT = "{name}_seed{seed}_lot"
 """Run folders of the recipe's rows: the shipped Factorial seeds were named for the whole-lot curriculum."""
-_TOPOLOGY_AE = (("checkpoints/bev/topology_ae.pt",
-                 "python -m np_policy.pretrain_bev --benchmark topology --out checkpoints/bev/topology_ae.pt "
+_TOPOLOGY_AE = (("checkpoints/bev/topology_ae_v2.pt",
+                 "python -m np_policy.pretrain_bev --benchmark topology --out checkpoints/bev/topology_ae_v2.pt "
                  "--seed 0"),)
+"""The BEV rows' autoencoder: ``v2``, pretrained on the raster without the off-image band (``topology_ae.pt`` was
+pretrained on the banded one; its runs are kept as ``*_banded_raster``, docs/results/2026-12-08-bev-band)."""
 PAPER_PLAN = (
     Configuration("factorial_np", "factorial", ("main", "staged", "connector", "curriculum"), "factorial_np.json",
                   run_name=_LOT),

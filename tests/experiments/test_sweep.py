@@ -281,9 +281,9 @@ def test_paper_plan_recognises_the_shipped_runs():
     assert states["site_np_seed0"].kind in ("interrupted", "training now", "finished")
     assert states["site_np_seed0"].epoch >= 65 and runs["site_np_seed0"].epochs == 240
     unavailable = sorted(name for name, state in states.items() if state.kind == "not available yet")
-    waiting = not (REPO / "checkpoints/bev/topology_ae.pt").exists()  # both backbones' BEV rows need the autoencoder
+    waiting = not (REPO / "checkpoints/bev/topology_ae_v2.pt").exists()  # both backbones' BEV rows need the autoencoder
     assert len(unavailable) == 6 * waiting and all("bev" in n for n in unavailable)
-    assert ("topology_ae.pt" in states["topology_hope_bev_seed0"].detail) == waiting
+    assert ("topology_ae_v2.pt" in states["topology_hope_bev_seed0"].detail) == waiting
     for added in ("none", "vertices"):  # the HOPE-style backbones of Table III, trained by hope_policy.train
         backbone = runs[f"topology_hope_{added}_seed0"]
         assert backbone.config.trainer == "hope_policy.train" and backbone.epochs == 10_000
