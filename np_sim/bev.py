@@ -119,14 +119,18 @@ def fill_polygon(label: np.ndarray, u: np.ndarray, v: np.ndarray, n: int, value:
         for a in range(n):
             b = a + 1 if a + 1 < n else 0
             if (v[a] <= vc) != (v[b] <= vc):
-                xs[m] = u[a] + (vc - v[a]) * (u[b] - u[a]) / (v[b] - v[a])
+                crossing = u[a] + (vc - v[a]) * (u[b] - u[a]) / (v[b] - v[a])
+                q = m  # insertion sort as the crossings come: a row has a handful (``xs[:m].sort()`` cost 4× more)
+                while q > 0 and xs[q - 1] > crossing:
+                    xs[q] = xs[q - 1]
+                    q -= 1
+                xs[q] = crossing
                 m += 1
-        xs[:m].sort()
         for p in range(0, m - 1, 2):
             i0 = max(0, int(math.ceil(xs[p] - 0.5)))
             i1 = min(cols, int(math.ceil(xs[p + 1] - 0.5)))
-            if i1 > i0:  # a span wholly left of the grid has i1 < 0, which a slice would count from the right
-                label[j, i0:i1] = value
+            for i in range(i0, i1):  # empty for a span wholly beyond either edge (a slice would count i1 < 0
+                label[j, i] = value  # from the right: the band fixed on 2026-12-08)
 
 
 @njit(cache=True, error_model="numpy")
