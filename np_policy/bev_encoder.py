@@ -17,14 +17,14 @@ Pretraining: Adam at 1e-3, mean-squared error between the reconstruction and the
 random actions in the benchmark's training environment (`np_sim.env.ParkingVectorEnv`, uniform starts); one
 autoencoder per benchmark. A held-out tenth of the images measures the reconstruction error after every epoch.
 
-    python -m np_policy.pretrain_bev --benchmark topology --out checkpoints/bev/topology_ae.pt --seed 0
+    python -m np_policy.pretrain_bev --benchmark topology --out checkpoints/bev/topology_ae_v2.pt --seed 0
 
 The images follow from the seed, so they are collected again rather than stored; after every epoch the model,
-optimiser and shuffling state go to ``FILE.snapshot.pt`` (the project's checkpoint format), and the same command
-continues from there after a kill. The finished file holds the autoencoder, its config (raster included) and the
-per-epoch errors, and ``FILE.png`` beside it shows held-out originals above their reconstructions; a finished
-file is never overwritten. `FrozenBevEncoder` loads it for the env's BEV observation
-(``ObservationConfig.use_bev``): the encoder only, in eval mode, without gradients.
+optimiser and shuffling state go to ``FILE`` with ``.snapshot`` before its suffix (``topology_ae_v2.snapshot.pt``; the
+project's checkpoint format), and the same command continues from there after a kill. The finished file holds the
+autoencoder, its config (raster included) and the per-epoch errors, and ``FILE.png`` beside it shows held-out
+originals above their reconstructions; a finished file is never overwritten. `FrozenBevEncoder` loads it for the
+env's BEV observation (``ObservationConfig.use_bev``): the encoder only, in eval mode, without gradients.
 """
 
 from __future__ import annotations

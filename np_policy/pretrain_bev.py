@@ -1,7 +1,7 @@
 """Pretrain one benchmark's BEV autoencoder (paper App. B; the model, the images and the schedule are in
 `np_policy.bev_encoder`):
 
-    python -m np_policy.pretrain_bev --benchmark topology --out checkpoints/bev/topology_ae.pt --seed 0
+    python -m np_policy.pretrain_bev --benchmark topology --out checkpoints/bev/topology_ae_v2.pt --seed 0
 
 Collects the tail-enabled random-policy images (seeded, so they are collected again rather than stored), trains
 with a progress bar (training and held-out MSE per epoch), snapshots after every epoch (the same command continues
