@@ -107,6 +107,14 @@ class BevConfig:
 
 # ------------------------------------------------------------------------------------------------ kernels
 @njit(cache=True, error_model="numpy")
+def _fill_span(label: np.ndarray, j: int, i0: int, i1: int, value: int) -> None:
+    """Set ``label[j, i0:i1] = value`` for the clipped span [i0, i1); nothing when i1 <= i0. A loop, not a slice: a
+    span wholly left of the grid has i1 < 0, which a slice counts from the right (the band fixed on 2026-12-08)."""
+    for i in range(i0, i1):
+        label[j, i] = value
+
+
+@njit(cache=True, error_model="numpy")
 def fill_polygon(label: np.ndarray, u: np.ndarray, v: np.ndarray, n: int, value: int, xs: np.ndarray) -> None:
     """Set ``label[j, i] = value`` at every sample (u, v) = (i + ½, j + ½) inside the polygon (u[:n], v[:n]) by the
     even–odd rule (scanline fill); ``xs`` is scratch of length >= n."""
@@ -129,8 +137,7 @@ def fill_polygon(label: np.ndarray, u: np.ndarray, v: np.ndarray, n: int, value:
         for p in range(0, m - 1, 2):
             i0 = max(0, int(math.ceil(xs[p] - 0.5)))
             i1 = min(cols, int(math.ceil(xs[p + 1] - 0.5)))
-            for i in range(i0, i1):  # empty for a span wholly beyond either edge (a slice would count i1 < 0
-                label[j, i] = value  # from the right: the band fixed on 2026-12-08)
+            _fill_span(label, j, i0, i1, value)
 
 
 @njit(cache=True, error_model="numpy")
@@ -147,8 +154,7 @@ def fill_disc(label: np.ndarray, cu: float, cv: float, r: float, value: int) -> 
         half = math.sqrt(r * r - dv * dv)
         i0 = max(0, int(math.floor(cu - half - 0.5)) + 1)
         i1 = min(cols, int(math.ceil(cu + half - 0.5)))
-        if i1 > i0:  # as in fill_polygon: never a negative slice end
-            label[j, i0:i1] = value
+        _fill_span(label, j, i0, i1, value)
 
 
 @njit(cache=True, error_model="numpy")
